@@ -1,0 +1,285 @@
+"""Every constraint family that RLD and CLC share, written once as pure functions of arrays.
+
+RLD (Brandes et al. 2020) uses them to build its binary program; CLC (Ivanov & Markgraf 2024)
+uses the same families as predicates on path pairs. Conventions:
+
+- ``points``: (N, 2) float64 cone positions, metres.
+- ``edges``: (E, 2) int64 cone-index pairs with ``i < j``, sorted lexicographically
+  (``candidate_edges`` makes them).
+- Boundaries: (k, 2) float arrays ordered from the car forward.
+
+Where a paper's inequality is strict, or printed the wrong way round, we state our reading:
+
+- RLD eq. 7 prints ``MinDist > d_min``; a *minimum* width needs ``MinDist < d_min`` (two edges
+  closer than the narrowest lane cannot both be boundary edges), as its text says.
+- The limits are closed sets everywhere (``|turn| <= phi_max``, ``w_min <= w <= w_max``,
+  ``MinDist >= d_min`` allowed), so that RLD's program (which cannot take strict inequalities) and
+  CLC's predicates (which the paper prints strict, eqs 13 and 15) accept exactly the same lanes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from rld import geometry as geo
+from rld.types import Pose
+
+__all__ = [
+    "candidate_edges",
+    "edge_lengths",
+    "width_conflicts",
+    "crossing_edge_pairs",
+    "heading_mask",
+    "near_car_mask",
+    "angle_triples",
+    "turn_within_limit",
+    "c_seg",
+    "c_poly",
+    "lane_widths",
+    "c_width",
+    "lane_is_feasible",
+    "find_starting_vertices",
+]
+
+
+def candidate_edges(points: np.ndarray, max_spacing_m: float) -> np.ndarray:
+    """Cone pairs that may be consecutive on one boundary: distance <= ``max_spacing_m``
+    (CLC eq. 2, the search graph; RLD eq. 35's D <= d_max on edges). Returns (E, 2) int64 with
+    ``i < j``, sorted."""
+    points = np.asarray(points, dtype=np.float64)
+    if points.shape[0] < 2:
+        return np.zeros((0, 2), dtype=np.int64)
+    pairs = cKDTree(points).query_pairs(max_spacing_m, output_type="ndarray").astype(np.int64)
+    if pairs.size == 0:
+        return np.zeros((0, 2), dtype=np.int64)
+    pairs.sort(axis=1)
+    order = np.lexsort((pairs[:, 1], pairs[:, 0]))
+    return np.ascontiguousarray(pairs[order])
+
+
+def edge_lengths(points: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """Length of every edge (RLD D_ij), metres."""
+    d = points[edges[:, 1]] - points[edges[:, 0]]
+    return np.hypot(d[:, 0], d[:, 1])
+
+
+def _nearby_edge_pairs(points: np.ndarray, edges: np.ndarray, reach_m: float) -> np.ndarray:
+    """Pairs (e, f), e < f, of edges that share no cone and whose segments may come within
+    ``reach_m`` of each other (a superset: midpoints within reach + the longest edge)."""
+    if edges.shape[0] < 2:
+        return np.zeros((0, 2), dtype=np.int64)
+    mid = (points[edges[:, 0]] + points[edges[:, 1]]) / 2
+    longest = float(edge_lengths(points, edges).max())
+    pairs = cKDTree(mid).query_pairs(reach_m + longest + 1e-9, output_type="ndarray")
+    pairs = np.sort(pairs.astype(np.int64), axis=1)
+    a, b = edges[pairs[:, 0]], edges[pairs[:, 1]]
+    disjoint = (
+        (a[:, 0] != b[:, 0]) & (a[:, 0] != b[:, 1]) & (a[:, 1] != b[:, 0]) & (a[:, 1] != b[:, 1])
+    )
+    pairs = pairs[disjoint]
+    order = np.lexsort((pairs[:, 1], pairs[:, 0]))
+    return np.ascontiguousarray(pairs[order])
+
+
+def width_conflicts(points: np.ndarray, edges: np.ndarray, min_width_m: float) -> np.ndarray:
+    """Edge pairs that cannot both be in a lane because the lane would be narrower than
+    ``min_width_m`` (RLD eqs 6-8).
+
+    A pair (e, f) of edges with four distinct cones conflicts when
+    ``MinDist(e, f) < d_min`` and ``End(e, f) = 0`` (our reading of eq. 7, see the module
+    docstring): the segments come closer than the narrowest lane somewhere other than
+    end to end. Consecutive edges of one boundary are closest end to end and stay allowed.
+    Returns (K, 2) int64 edge indices, ``e < f``, sorted.
+    """
+    pairs = _nearby_edge_pairs(points, edges, min_width_m)
+    if pairs.shape[0] == 0:
+        return pairs
+    e, f = edges[pairs[:, 0]], edges[pairs[:, 1]]
+    d, end = geo.segment_distance_end(points[e[:, 0]], points[e[:, 1]], points[f[:, 0]],
+                                      points[f[:, 1]])
+    return pairs[(d < min_width_m) & ~end]
+
+
+def crossing_edge_pairs(points: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """Edge pairs with four distinct cones whose segments share a point (cross, touch or
+    overlap): no lane may hold both (the no-crossing constraint of RLD section V; CLC C_poly
+    implies it). Returns (K, 2) int64 edge indices, ``e < f``, sorted."""
+    pairs = _nearby_edge_pairs(points, edges, 0.0)
+    if pairs.shape[0] == 0:
+        return pairs
+    e, f = edges[pairs[:, 0]], edges[pairs[:, 1]]
+    hit = geo.segments_intersect(points[e[:, 0]], points[e[:, 1]], points[f[:, 0]],
+                                 points[f[:, 1]])
+    return pairs[hit]
+
+
+def heading_mask(
+    points: np.ndarray, edges: np.ndarray, pose: Pose, radius_m: float, tolerance_rad: float
+) -> np.ndarray:
+    """RLD h (eq. 9): edges whose nearest point is within ``radius_m`` of the car and whose line
+    is within ``tolerance_rad`` of the car's heading (undirected: an edge and its reverse
+    agree). Boolean (E,)."""
+    a, b = points[edges[:, 0]], points[edges[:, 1]]
+    near = geo.point_segment_distance(pose.xy, a, b) <= radius_m
+    u = b - a
+    length = np.hypot(u[:, 0], u[:, 1])
+    cos = np.abs(u @ pose.heading) / np.where(length > 0, length, 1.0)
+    angle = np.arccos(np.clip(cos, 0.0, 1.0))
+    return near & (angle <= tolerance_rad) & (length > 0)
+
+
+def near_car_mask(points: np.ndarray, pose: Pose, radius_m: float) -> np.ndarray:
+    """RLD r (eq. 11): cones within ``radius_m`` of the car, the ones that may start a boundary
+    (also CLC's start-vertex search radius, IV-C). Boolean (N,)."""
+    d = points - pose.xy
+    return np.hypot(d[:, 0], d[:, 1]) <= radius_m
+
+
+def angle_triples(points: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every pair of candidate edges that meet at a cone, as RLD's f variables (eq. 21).
+
+    Returns ``(triples, turns)``: ``triples`` (T, 5) int64 rows ``(i, j, k, e_ij, e_jk)``
+    with the shared cone ``j`` in the middle, ``i < k``, and the indices of the two edges; and
+    ``turns`` (T,), the signed turn from i->j to j->k in radians (its absolute value is the same
+    read in either direction).
+    """
+    E = edges.shape[0]
+    if E < 2:
+        return np.zeros((0, 5), dtype=np.int64), np.zeros(0)
+    # Incidence: for every (cone, edge, other end) sorted by cone.
+    cone = np.concatenate([edges[:, 0], edges[:, 1]])
+    other = np.concatenate([edges[:, 1], edges[:, 0]])
+    eid = np.concatenate([np.arange(E), np.arange(E)])
+    order = np.lexsort((other, cone))
+    cone, other, eid = cone[order], other[order], eid[order]
+    starts = np.searchsorted(cone, np.arange(points.shape[0]))
+    ends = np.searchsorted(cone, np.arange(points.shape[0]), side="right")
+    rows = []
+    for j in np.flatnonzero(ends - starts >= 2):
+        s, t = starts[j], ends[j]
+        o, e = other[s:t], eid[s:t]
+        ia, ib = np.triu_indices(t - s, k=1)
+        rows.append(np.column_stack([o[ia], np.full(ia.size, j), o[ib], e[ia], e[ib]]))
+    if not rows:
+        return np.zeros((0, 5), dtype=np.int64), np.zeros(0)
+    triples = np.ascontiguousarray(np.vstack(rows).astype(np.int64))
+    turns = geo.turn_angles(points[triples[:, 0]], points[triples[:, 1]], points[triples[:, 2]])
+    return triples, turns
+
+
+def turn_within_limit(turns: np.ndarray, max_turn_rad: float) -> np.ndarray:
+    """``|turn| <= phi_max`` (CLC C_seg, eq. 15; with theta_e = pi the complement of RLD's
+    high angle-cost mask t^c, eq. 28)."""
+    return np.abs(turns) <= max_turn_rad
+
+
+def _closed(xy: np.ndarray, closed: bool) -> np.ndarray:
+    return np.vstack([xy, xy[:1]]) if closed and xy.shape[0] > 1 else xy
+
+
+def c_seg(left: np.ndarray, right: np.ndarray, max_turn_rad: float, closed: bool = False) -> bool:
+    """CLC C_seg (eq. 15): no turn between consecutive segments of either boundary exceeds
+    ``max_turn_rad`` (wrapping around for closed boundaries)."""
+    for xy in (left, right):
+        turns = geo.polyline_turn_angles(xy, closed=closed and len(xy) >= 3)
+        if not np.all(turn_within_limit(turns, max_turn_rad)):
+            return False
+    return True
+
+
+def c_poly(left: np.ndarray, right: np.ndarray, closed: bool = False) -> bool:
+    """CLC C_poly (section VI): the lane polygon is simple.
+
+    Open lane: the ring left + reversed right does not touch or cross itself. Closed lane: each
+    boundary ring is simple and the two rings share no point.
+    """
+    left = np.asarray(left, dtype=np.float64)
+    right = np.asarray(right, dtype=np.float64)
+    if not closed:
+        return geo.ring_is_simple(geo.lane_ring(left, right))
+    if not (geo.ring_is_simple(left) and geo.ring_is_simple(right)):
+        return False
+    L, R = _closed(left, True), _closed(right, True)
+    a0, a1 = L[:-1][:, None, :], L[1:][:, None, :]
+    b0, b1 = R[:-1][None, :, :], R[1:][None, :, :]
+    return not bool(np.any(geo.segments_intersect(a0, a1, b0, b1)))
+
+
+def lane_widths(left: np.ndarray, right: np.ndarray, closed: bool = False) -> np.ndarray:
+    """CLC lane width W(L, R) (eqs 8-12): the lengths of all matching lines.
+
+    For each vertex and each segment of one boundary (the query, eq. 8), the nearest point pair
+    to the whole other boundary (the target) gives a matching line (eq. 9); both boundaries take
+    both roles (eq. 11). Returned in the order: left vertices, left segments, right vertices,
+    right segments. Metres.
+    """
+    L = _closed(np.asarray(left, dtype=np.float64), closed)
+    R = _closed(np.asarray(right, dtype=np.float64), closed)
+    if L.shape[0] == 0 or R.shape[0] == 0:
+        return np.zeros(0)
+    out = []
+    for Q, T in ((L, R), (R, L)):
+        # k = 0: vertices as queries.
+        out.append(geo.point_polyline_distance(Q, T))
+        # k = 1: segments as queries, against every target segment (or the single point).
+        if Q.shape[0] >= 2:
+            q0, q1 = Q[:-1][:, None, :], Q[1:][:, None, :]
+            if T.shape[0] >= 2:
+                t0, t1 = T[:-1][None, :, :], T[1:][None, :, :]
+            else:
+                t0 = t1 = T[None, :, :]
+            out.append(geo.segment_distance(q0, q1, t0, t1).min(axis=1))
+    return np.concatenate(out)
+
+
+def c_width(
+    left: np.ndarray,
+    right: np.ndarray,
+    min_width_m: float,
+    max_width_m: float,
+    closed: bool = False,
+) -> bool:
+    """CLC C_width (eq. 13): every matching line is within [w_min, w_max] (closed bounds, see
+    the module docstring)."""
+    w = lane_widths(left, right, closed)
+    return bool(np.all((w >= min_width_m) & (w <= max_width_m)))
+
+
+def lane_is_feasible(left: np.ndarray, right: np.ndarray, params, closed: bool = False) -> bool:
+    """CLC CD(P) (eq. 6) on a whole path pair: C_seg, C_width and C_poly, plus the spacing limit
+    the search graph enforces (CLC constraint 1, ``max_cone_spacing_m``)."""
+    for xy in (left, right):
+        if len(xy) >= 2:
+            seg = np.diff(_closed(np.asarray(xy, float), closed), axis=0)
+            if np.any(np.hypot(seg[:, 0], seg[:, 1]) > params.max_cone_spacing_m):
+                return False
+    return (
+        c_seg(left, right, params.max_turn_angle_rad, closed)
+        and c_width(left, right, params.min_width_m, params.max_width_m, closed)
+        and c_poly(left, right, closed)
+    )
+
+
+def find_starting_vertices(
+    points: np.ndarray, pose: Pose, radius_m: float
+) -> tuple[int, int] | None:
+    """CLC ``find_starting_vertices`` (IV-C): the first left and right cone.
+
+    Candidates lie within ``radius_m`` of the car (RLD's near-car mask r, eq. 11); the left one
+    at a positive angle from the heading, the right one at a negative angle. Of all pairs, the
+    one most symmetric about the car's line wins: the mirror image of the left cone across that
+    line is nearest the right cone. Ties go to the lower indices. ``None`` when a side has no
+    candidate.
+    """
+    near = np.flatnonzero(near_car_mask(points, pose, radius_m))
+    if near.size < 2:
+        return None
+    local = pose.to_local(points[near])
+    lefts, rights = near[local[:, 1] > 0], near[local[:, 1] < 0]
+    if lefts.size == 0 or rights.size == 0:
+        return None
+    ll, rl = local[local[:, 1] > 0], local[local[:, 1] < 0]
+    asym = np.hypot(ll[:, None, 0] - rl[None, :, 0], ll[:, None, 1] + rl[None, :, 1])
+    k = int(np.argmin(asym))  # row-major: lowest left index first, then right
+    return int(lefts[k // rights.size]), int(rights[k % rights.size])

@@ -1,0 +1,94 @@
+"""The cost terms of RLD (Brandes et al. 2020, section II-G/H), written once.
+
+RLD's program uses them as objective coefficients; CLC's ``rld_cost`` ranker evaluates the same
+objective on whole path pairs through ``lane_cost``, so the two methods can be compared on one
+definition.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rld import geometry as geo
+from rld.types import LaneParams, Pose
+
+__all__ = [
+    "spacing_cost",
+    "angle_cost",
+    "heading_cost",
+    "high_cost_mask",
+    "edge_objective",
+    "lane_cost",
+]
+
+
+def spacing_cost(lengths_m: np.ndarray, expected_m: float, tolerance_m: float) -> np.ndarray:
+    """RLD eq. 18: s_ij = ((D_ij - d_e) / d_t)^4, dimensionless."""
+    return ((np.asarray(lengths_m, dtype=np.float64) - expected_m) / tolerance_m) ** 4
+
+
+def angle_cost(turns_rad: np.ndarray, tolerance_rad: float) -> np.ndarray:
+    """RLD eq. 20: t_ijk = ((angle(a_ij, a_jk) - theta_e) / theta_t)^4 with theta_e = pi.
+
+    ``angle`` is the angle at the shared cone between the two edges, pi for a straight line, so
+    ``angle - pi = -|turn|`` and the cost is (|turn| / theta_t)^4.
+    """
+    return (np.abs(np.asarray(turns_rad, dtype=np.float64)) / tolerance_rad) ** 4
+
+
+def heading_cost(
+    points: np.ndarray, edges: np.ndarray, pose: Pose, min_distance_m: float
+) -> np.ndarray:
+    """RLD eq. 25: p_ij = (|v_ij x h_c| / d_car(a_ij))^4.
+
+    ``v_ij`` is the edge vector (metres, not normalised, as printed), ``h_c`` the unit heading,
+    ``d_car`` the distance from the car to the edge's midpoint, floored at ``min_distance_m``
+    (our addition: the paper divides by zero for an edge whose midpoint is under the car).
+    """
+    a, b = points[edges[:, 0]], points[edges[:, 1]]
+    v = b - a
+    h = pose.heading
+    cross = np.abs(v[:, 0] * h[1] - v[:, 1] * h[0])
+    mid = (a + b) / 2 - pose.xy
+    d_car = np.maximum(np.hypot(mid[:, 0], mid[:, 1]), min_distance_m)
+    return (cross / d_car) ** 4
+
+
+def high_cost_mask(costs: np.ndarray, critical: float) -> np.ndarray:
+    """RLD eqs 27-28: the entries whose cost exceeds the critical value s_crit or t_crit; the
+    program forbids them (and ours never creates their variables)."""
+    return np.asarray(costs) > critical
+
+
+def edge_objective(
+    points: np.ndarray, edges: np.ndarray, pose: Pose, params: LaneParams
+) -> np.ndarray:
+    """Coefficient of every edge variable in RLD's objective (eq. 29):
+    ``w_s s_ij + w_p p_ij - w_b``."""
+    lengths = np.hypot(*(points[edges[:, 1]] - points[edges[:, 0]]).T)
+    s = spacing_cost(lengths, params.expected_spacing_m, params.spacing_tolerance_m)
+    p = heading_cost(points, edges, pose, params.heading_min_distance_m)
+    return params.w_spacing * s + params.w_heading * p - params.w_benefit
+
+
+def lane_cost(
+    points: np.ndarray,
+    left: np.ndarray,
+    right: np.ndarray,
+    pose: Pose,
+    params: LaneParams,
+    closed: bool = False,
+) -> float:
+    """RLD's objective (eq. 29) of the lane graph made by two index sequences: the sum of the
+    edge coefficients of its edges plus ``w_t`` times the angle cost at every interior cone."""
+    total = 0.0
+    for idx in (left, right):
+        idx = np.asarray(idx, dtype=np.int64)
+        if idx.size < 2:
+            continue
+        seq = np.concatenate([idx, idx[:1]]) if closed else idx
+        edges = np.column_stack([seq[:-1], seq[1:]])
+        total += float(edge_objective(points, edges, pose, params).sum())
+        turns = geo.polyline_turn_angles(points[idx], closed=closed)
+        total += params.w_angle * float(angle_cost(turns, params.angle_tolerance_rad).sum())
+    return total

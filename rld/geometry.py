@@ -1,0 +1,248 @@
+"""Vectorized 2D geometry over numpy arrays (metres, radians).
+
+Functions take arrays of points of shape (..., 2), broadcast them against each other and return
+arrays. The arithmetic lives once, in the numba kernels of ``rld.geometry_kernels``; this module
+is the plain numpy face of it, plus polyline helpers (lengths, resampling, the centreline between
+two boundaries and the lane polygon) that are not on any hot path.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+from shapely.geometry import LinearRing, Polygon
+from shapely.validation import make_valid
+
+from rld import geometry_kernels as gk
+
+__all__ = [
+    "point_segment_distance",
+    "segment_distance",
+    "segment_distance_end",
+    "segments_intersect",
+    "segments_cross",
+    "turn_angles",
+    "polyline_turn_angles",
+    "polyline_length",
+    "cumulative_length",
+    "resample_polyline",
+    "point_polyline_distance",
+    "ring_is_simple",
+    "centerline",
+    "lane_ring",
+    "lane_polygon",
+    "polygonal_part",
+]
+
+
+def _flat(*arrays: np.ndarray) -> tuple[tuple[int, ...], list[np.ndarray]]:
+    """Broadcast (..., 2) arrays together; return the leading shape and (M, 2) float64 copies."""
+    arrs = [np.asarray(a, dtype=np.float64) for a in arrays]
+    for a in arrs:
+        if a.shape[-1:] != (2,):
+            raise ValueError(f"points must have a last axis of length 2, got shape {a.shape}")
+    b = np.broadcast_arrays(*arrs)
+    shape = b[0].shape[:-1]
+    return shape, [np.ascontiguousarray(x.reshape(-1, 2)) for x in b]
+
+
+def point_segment_distance(p, a, b) -> np.ndarray:
+    """Distance from points ``p`` to segments ``a``-``b`` (all (..., 2)), metres."""
+    shape, (p, a, b) = _flat(p, a, b)
+    out = np.empty(p.shape[0])
+    gk.point_segment_distance_many(p, a, b, out)
+    return out.reshape(shape)
+
+
+def segment_distance_end(a0, a1, b0, b1) -> tuple[np.ndarray, np.ndarray]:
+    """Minimum distance between segments ``a0``-``a1`` and ``b0``-``b1`` (RLD MinDist, metres)
+    and RLD's End() (fig. 4): True where every closest pair joins an endpoint of one segment to
+    an endpoint of the other. See ``geometry_kernels.segment_distance_end`` for degenerate cases.
+    """
+    shape, (a0, a1, b0, b1) = _flat(a0, a1, b0, b1)
+    d = np.empty(a0.shape[0])
+    end = np.empty(a0.shape[0], dtype=np.bool_)
+    gk.segment_distance_end_many(a0, a1, b0, b1, d, end)
+    return d.reshape(shape), end.reshape(shape)
+
+
+def segment_distance(a0, a1, b0, b1) -> np.ndarray:
+    """Minimum distance between segments ``a0``-``a1`` and ``b0``-``b1``, metres."""
+    return segment_distance_end(a0, a1, b0, b1)[0]
+
+
+def segments_intersect(a0, a1, b0, b1) -> np.ndarray:
+    """Closed segments share at least one point (crossing, touching or overlapping)."""
+    shape, (a0, a1, b0, b1) = _flat(a0, a1, b0, b1)
+    out = np.empty(a0.shape[0], dtype=np.bool_)
+    gk.segments_intersect_many(a0, a1, b0, b1, out)
+    return out.reshape(shape)
+
+
+def segments_cross(a0, a1, b0, b1) -> np.ndarray:
+    """Proper intersection: the segments cross at one point interior to both."""
+    shape, (a0, a1, b0, b1) = _flat(a0, a1, b0, b1)
+    out = np.empty(a0.shape[0], dtype=np.bool_)
+    gk.segments_cross_many(a0, a1, b0, b1, out)
+    return out.reshape(shape)
+
+
+def turn_angles(p0, p1, p2) -> np.ndarray:
+    """Signed turn from segment p0-p1 to segment p1-p2, radians in (-pi, pi]; 0 is straight on,
+    positive turns left. A zero-length segment gives pi (see the kernel)."""
+    shape, (p0, p1, p2) = _flat(p0, p1, p2)
+    out = np.empty(p0.shape[0])
+    gk.turn_angle_many(p0, p1, p2, out)
+    return out.reshape(shape)
+
+
+def polyline_turn_angles(xy: np.ndarray, closed: bool = False) -> np.ndarray:
+    """Signed turn at every interior vertex of the polyline ``xy`` (k, 2): k - 2 values, or k
+    values for a closed ring (the turn at vertex i, from segment i-1,i to i,i+1)."""
+    xy = np.asarray(xy, dtype=np.float64)
+    if closed:
+        return turn_angles(np.roll(xy, 1, axis=0), xy, np.roll(xy, -1, axis=0))
+    if xy.shape[0] < 3:
+        return np.zeros(0)
+    return turn_angles(xy[:-2], xy[1:-1], xy[2:])
+
+
+def cumulative_length(xy: np.ndarray, closed: bool = False) -> np.ndarray:
+    """Arc length at every vertex of the polyline ``xy`` (k, 2), starting at 0, metres. For a
+    closed ring one more entry gives the length back to the first vertex."""
+    xy = np.asarray(xy, dtype=np.float64)
+    if closed and xy.shape[0] > 0:
+        xy = np.vstack([xy, xy[:1]])
+    if xy.shape[0] == 0:
+        return np.zeros(0)
+    seg = np.hypot(*np.diff(xy, axis=0).T)
+    return np.concatenate([[0.0], np.cumsum(seg)])
+
+
+def polyline_length(xy: np.ndarray, closed: bool = False) -> float:
+    """Length of the polyline ``xy`` (CLC eq. 7), metres."""
+    c = cumulative_length(xy, closed)
+    return float(c[-1]) if c.size else 0.0
+
+
+def resample_polyline(xy: np.ndarray, step_m: float, closed: bool = False) -> np.ndarray:
+    """Points every ``step_m`` metres of arc length along ``xy`` (the last vertex is kept for an
+    open polyline; a closed ring is not repeated at its end)."""
+    xy = np.asarray(xy, dtype=np.float64)
+    if xy.shape[0] < 2:
+        return xy.copy()
+    pts = np.vstack([xy, xy[:1]]) if closed else xy
+    s = cumulative_length(pts)
+    total = s[-1]
+    if total == 0:
+        return xy[:1].copy()
+    n = max(int(np.floor(total / step_m)), 1)
+    t = np.arange(n + (0 if closed else 1)) * (total / n)
+    if not closed:
+        t[-1] = total
+    return np.column_stack([np.interp(t, s, pts[:, 0]), np.interp(t, s, pts[:, 1])])
+
+
+def point_polyline_distance(p, poly: np.ndarray) -> np.ndarray:
+    """Distance from each point ``p`` (k, 2) to the polyline ``poly`` (m, 2), metres."""
+    p = np.atleast_2d(np.asarray(p, dtype=np.float64))
+    poly = np.ascontiguousarray(poly, dtype=np.float64)
+    if poly.shape[0] == 0:
+        return np.full(p.shape[0], np.inf)
+    return np.array([gk.point_polyline_distance(q[0], q[1], poly) for q in p])
+
+
+def ring_is_simple(ring: np.ndarray) -> bool:
+    """The closed ring (k, 2) does not touch or cross itself (CLC C_poly, section VI)."""
+    ring = np.ascontiguousarray(ring, dtype=np.float64)
+    return not gk.polyline_self_intersects(ring)
+
+
+def centerline(
+    left: np.ndarray,
+    right: np.ndarray,
+    closed: bool = False,
+    resolution_m: float | None = None,
+) -> np.ndarray:
+    """Midpoints between two boundaries, in their common order, metres.
+
+    The boundaries are zipped like a triangle strip: starting from (left[0], right[0]), each step
+    advances the side whose next vertex makes the shorter rung (the greedy rule of the CLC
+    left-right decider, eq. 5, applied to distances), and the midpoint of every rung is kept. With
+    ``resolution_m`` both boundaries are first resampled at that spacing and the result is
+    resampled at it too, which gives a smooth centreline for poses and the stability metric.
+    ``closed`` zips two rings once around.
+    """
+    L = np.asarray(left, dtype=np.float64)
+    R = np.asarray(right, dtype=np.float64)
+    if L.shape[0] == 0 or R.shape[0] == 0:
+        return np.zeros((0, 2))
+    if resolution_m is not None:
+        L = resample_polyline(L, resolution_m, closed)
+        R = resample_polyline(R, resolution_m, closed)
+    if closed:
+        L = np.vstack([L, L[:1]])
+        R = np.vstack([R, R[:1]])
+    i = j = 0
+    mids = [(L[0] + R[0]) / 2]
+    while i < L.shape[0] - 1 or j < R.shape[0] - 1:
+        if i == L.shape[0] - 1:
+            j += 1
+        elif j == R.shape[0] - 1:
+            i += 1
+        elif np.hypot(*(L[i + 1] - R[j])) <= np.hypot(*(L[i] - R[j + 1])):
+            i += 1
+        else:
+            j += 1
+        mids.append((L[i] + R[j]) / 2)
+    out = np.array(mids)
+    if closed:
+        out = out[:-1]
+    if resolution_m is not None and out.shape[0] > 1:
+        out = resample_polyline(out, resolution_m, closed)
+    return out
+
+
+def lane_ring(left: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """The lane polygon's vertices (CLC section VI): the left boundary followed by the right one
+    reversed."""
+    return np.vstack([np.asarray(left, float).reshape(-1, 2), np.asarray(right, float)[::-1]])
+
+
+def polygonal_part(geom):
+    """The polygonal part of a shapely geometry (drops points and lines), as one geometry."""
+    if geom.is_empty:
+        return Polygon()
+    if geom.geom_type in ("Polygon", "MultiPolygon"):
+        return geom
+    parts = [g for g in getattr(geom, "geoms", []) if g.geom_type in ("Polygon", "MultiPolygon")]
+    if not parts:
+        return Polygon()
+    return shapely.union_all(parts)
+
+
+def lane_polygon(left: np.ndarray, right: np.ndarray, closed: bool = False, repair: bool = True):
+    """The driving lane as a shapely geometry.
+
+    Open lane: the polygon of ``lane_ring`` (left, then right reversed). Closed lane (both
+    boundaries are loops): the region between the two rings. An invalid polygon (a boundary
+    crossing the other) is repaired with ``shapely.make_valid`` and reduced to its polygonal part
+    when ``repair`` is set; an empty ``Polygon`` stands for a lane with no area.
+    """
+    L = np.asarray(left, dtype=np.float64).reshape(-1, 2)
+    R = np.asarray(right, dtype=np.float64).reshape(-1, 2)
+    if closed:
+        if L.shape[0] < 3 or R.shape[0] < 3:
+            return Polygon()
+        a, b = Polygon(LinearRing(L)), Polygon(LinearRing(R))
+        if repair:
+            a, b = polygonal_part(make_valid(a)), polygonal_part(make_valid(b))
+        outer, inner = (a, b) if a.area >= b.area else (b, a)
+        return polygonal_part(outer.difference(inner))
+    ring = lane_ring(L, R)
+    if ring.shape[0] < 3:
+        return Polygon()
+    poly = Polygon(ring)
+    if repair and not poly.is_valid:
+        poly = polygonal_part(make_valid(poly))
+    return poly

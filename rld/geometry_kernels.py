@@ -1,0 +1,279 @@
+"""numba kernels for the 2D geometry that the searches call in their inner loops.
+
+Every function here takes plain floats or contiguous ``float64`` arrays and is compiled with
+``cache=True``. The public, vectorized numpy interface is ``rld.geometry``; the searches
+(``clc``) call these kernels directly from their own compiled code.
+
+Conventions: a segment is given by its two endpoints; a zero-length segment is a point.
+Tolerances are absolute, in metres (``EPS``), far below any cone-position accuracy.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+EPS = 1e-9
+
+
+@njit(cache=True)
+def cross2(ax, ay, bx, by):
+    """z-component of the cross product of 2D vectors a and b."""
+    return ax * by - ay * bx
+
+
+@njit(cache=True)
+def orient(ax, ay, bx, by, cx, cy):
+    """Twice the signed area of triangle abc: > 0 counter-clockwise, < 0 clockwise."""
+    return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+
+
+@njit(cache=True)
+def point_segment_param(px, py, ax, ay, bx, by):
+    """Closest point on segment ab to p: returns (distance, t) with the point a + t (b - a),
+    t in [0, 1] (t = 0 for a zero-length segment)."""
+    dx = bx - ax
+    dy = by - ay
+    ll = dx * dx + dy * dy
+    t = 0.0
+    if ll > 0.0:
+        t = ((px - ax) * dx + (py - ay) * dy) / ll
+        if t < 0.0:
+            t = 0.0
+        elif t > 1.0:
+            t = 1.0
+    qx = ax + t * dx - px
+    qy = ay + t * dy - py
+    return math.sqrt(qx * qx + qy * qy), t
+
+
+@njit(cache=True)
+def point_segment_distance(px, py, ax, ay, bx, by):
+    """Euclidean distance from point p to segment ab, metres."""
+    d, _ = point_segment_param(px, py, ax, ay, bx, by)
+    return d
+
+
+@njit(cache=True)
+def _on_segment(px, py, ax, ay, bx, by):
+    """p, known collinear with ab, lies within ab's bounding box."""
+    return (
+        min(ax, bx) - EPS <= px <= max(ax, bx) + EPS
+        and min(ay, by) - EPS <= py <= max(ay, by) + EPS
+    )
+
+
+@njit(cache=True)
+def segments_intersect(ax, ay, bx, by, cx, cy, dx, dy):
+    """Closed segments ab and cd share at least one point (crossing, touching or overlapping)."""
+    o1 = orient(ax, ay, bx, by, cx, cy)
+    o2 = orient(ax, ay, bx, by, dx, dy)
+    o3 = orient(cx, cy, dx, dy, ax, ay)
+    o4 = orient(cx, cy, dx, dy, bx, by)
+    if ((o1 > 0 and o2 < 0) or (o1 < 0 and o2 > 0)) and (
+        (o3 > 0 and o4 < 0) or (o3 < 0 and o4 > 0)
+    ):
+        return True
+    if o1 == 0 and _on_segment(cx, cy, ax, ay, bx, by):
+        return True
+    if o2 == 0 and _on_segment(dx, dy, ax, ay, bx, by):
+        return True
+    if o3 == 0 and _on_segment(ax, ay, cx, cy, dx, dy):
+        return True
+    if o4 == 0 and _on_segment(bx, by, cx, cy, dx, dy):
+        return True
+    return False
+
+
+@njit(cache=True)
+def segments_cross(ax, ay, bx, by, cx, cy, dx, dy):
+    """Proper intersection: ab and cd cross at a single point interior to both (touching at an
+    endpoint or overlapping collinearly does not count)."""
+    o1 = orient(ax, ay, bx, by, cx, cy)
+    o2 = orient(ax, ay, bx, by, dx, dy)
+    o3 = orient(cx, cy, dx, dy, ax, ay)
+    o4 = orient(cx, cy, dx, dy, bx, by)
+    return ((o1 > 0 and o2 < 0) or (o1 < 0 and o2 > 0)) and (
+        (o3 > 0 and o4 < 0) or (o3 < 0 and o4 > 0)
+    )
+
+
+@njit(cache=True)
+def _parallel_overlap(ax, ay, bx, by, cx, cy, dx, dy):
+    """Length of the overlap of the projections of ab and cd onto the longer one's direction,
+    when the two are parallel (else -1)."""
+    ux = bx - ax
+    uy = by - ay
+    vx = dx - cx
+    vy = dy - cy
+    lu = math.sqrt(ux * ux + uy * uy)
+    lv = math.sqrt(vx * vx + vy * vy)
+    if lu <= EPS or lv <= EPS:
+        return -1.0
+    if abs(cross2(ux, uy, vx, vy)) > EPS * lu * lv:
+        return -1.0
+    if lv > lu:
+        ux = vx
+        uy = vy
+        lu = lv
+    ux /= lu
+    uy /= lu
+    pa = ax * ux + ay * uy
+    pb = bx * ux + by * uy
+    pc = cx * ux + cy * uy
+    pd = dx * ux + dy * uy
+    return min(max(pa, pb), max(pc, pd)) - max(min(pa, pb), min(pc, pd))
+
+
+@njit(cache=True)
+def segment_distance_end(ax, ay, bx, by, cx, cy, dx, dy):
+    """Minimum distance between segments ab and cd (metres), and RLD's End() (fig. 4).
+
+    ``End`` is True when every closest pair of points joins an endpoint of ab with an endpoint
+    of cd: the segments are closest only at their ends. It is False when the minimum is also
+    attained at a point interior to either segment (a perpendicular foot, a proper crossing, a
+    parallel overlap). Two segments touching at one shared endpoint have End True; a
+    zero-length segment counts as its own endpoint.
+    """
+    if segments_intersect(ax, ay, bx, by, cx, cy, dx, dy):
+        shared = (
+            (ax == cx and ay == cy)
+            or (ax == dx and ay == dy)
+            or (bx == cx and by == cy)
+            or (bx == dx and by == dy)
+        )
+        if not shared:
+            return 0.0, False
+        # A shared endpoint: the contact is that point only unless they overlap collinearly.
+        if _parallel_overlap(ax, ay, bx, by, cx, cy, dx, dy) > EPS:
+            return 0.0, False
+        return 0.0, True
+    d1, t1 = point_segment_param(ax, ay, cx, cy, dx, dy)
+    d2, t2 = point_segment_param(bx, by, cx, cy, dx, dy)
+    d3, t3 = point_segment_param(cx, cy, ax, ay, bx, by)
+    d4, t4 = point_segment_param(dx, dy, ax, ay, bx, by)
+    d = min(min(d1, d2), min(d3, d4))
+    tol = EPS * (1.0 + d)
+    end = True
+    # An interior foot that attains the minimum means the closest pair is not end-to-end.
+    if d1 <= d + tol and EPS < t1 < 1.0 - EPS:
+        end = False
+    if d2 <= d + tol and EPS < t2 < 1.0 - EPS:
+        end = False
+    if d3 <= d + tol and EPS < t3 < 1.0 - EPS:
+        end = False
+    if d4 <= d + tol and EPS < t4 < 1.0 - EPS:
+        end = False
+    # Parallel segments facing each other over a stretch are closest along all of it.
+    if end and _parallel_overlap(ax, ay, bx, by, cx, cy, dx, dy) > EPS:
+        end = False
+    return d, end
+
+
+@njit(cache=True)
+def segment_distance(ax, ay, bx, by, cx, cy, dx, dy):
+    """Minimum Euclidean distance between segments ab and cd, metres (RLD MinDist, eq. 7)."""
+    d, _ = segment_distance_end(ax, ay, bx, by, cx, cy, dx, dy)
+    return d
+
+
+@njit(cache=True)
+def turn_angle(ax, ay, bx, by, cx, cy):
+    """Signed turn (radians, in (-pi, pi]) from segment ab to segment bc: 0 straight on,
+    positive to the left. A zero-length segment has no direction and counts as a full
+    reversal (pi), so it can never pass a turn limit."""
+    ux = bx - ax
+    uy = by - ay
+    vx = cx - bx
+    vy = cy - by
+    if (ux == 0.0 and uy == 0.0) or (vx == 0.0 and vy == 0.0):
+        return math.pi
+    return math.atan2(cross2(ux, uy, vx, vy), ux * vx + uy * vy)
+
+
+# ----------------------------------------------------------------------------------------------
+# Loops over arrays, used by the vectorized wrappers in rld.geometry.
+
+
+@njit(cache=True)
+def point_segment_distance_many(p, a, b, out):
+    for i in range(p.shape[0]):
+        out[i] = point_segment_distance(p[i, 0], p[i, 1], a[i, 0], a[i, 1], b[i, 0], b[i, 1])
+
+
+@njit(cache=True)
+def segment_distance_end_many(a, b, c, d, out_d, out_end):
+    for i in range(a.shape[0]):
+        dist, end = segment_distance_end(
+            a[i, 0], a[i, 1], b[i, 0], b[i, 1], c[i, 0], c[i, 1], d[i, 0], d[i, 1]
+        )
+        out_d[i] = dist
+        out_end[i] = end
+
+
+@njit(cache=True)
+def segments_intersect_many(a, b, c, d, out):
+    for i in range(a.shape[0]):
+        out[i] = segments_intersect(
+            a[i, 0], a[i, 1], b[i, 0], b[i, 1], c[i, 0], c[i, 1], d[i, 0], d[i, 1]
+        )
+
+
+@njit(cache=True)
+def segments_cross_many(a, b, c, d, out):
+    for i in range(a.shape[0]):
+        out[i] = segments_cross(
+            a[i, 0], a[i, 1], b[i, 0], b[i, 1], c[i, 0], c[i, 1], d[i, 0], d[i, 1]
+        )
+
+
+@njit(cache=True)
+def turn_angle_many(a, b, c, out):
+    for i in range(a.shape[0]):
+        out[i] = turn_angle(a[i, 0], a[i, 1], b[i, 0], b[i, 1], c[i, 0], c[i, 1])
+
+
+@njit(cache=True)
+def point_polyline_distance(px, py, poly):
+    """Distance from point p to the polyline ``poly`` (k, 2); a single point if k == 1."""
+    k = poly.shape[0]
+    if k == 1:
+        return math.hypot(px - poly[0, 0], py - poly[0, 1])
+    best = np.inf
+    for i in range(k - 1):
+        d = point_segment_distance(px, py, poly[i, 0], poly[i, 1], poly[i + 1, 0], poly[i + 1, 1])
+        if d < best:
+            best = d
+    return best
+
+
+@njit(cache=True)
+def polyline_self_intersects(ring):
+    """Whether the closed ring ``ring`` (k, 2; last point joins the first) is not simple:
+    two non-adjacent edges share a point, or two adjacent edges overlap."""
+    k = ring.shape[0]
+    if k < 3:
+        return False
+    for i in range(k):
+        ax = ring[i, 0]
+        ay = ring[i, 1]
+        bx = ring[(i + 1) % k, 0]
+        by = ring[(i + 1) % k, 1]
+        if ax == bx and ay == by:
+            return True
+        for j in range(i + 1, k):
+            cx = ring[j, 0]
+            cy = ring[j, 1]
+            dx = ring[(j + 1) % k, 0]
+            dy = ring[(j + 1) % k, 1]
+            adjacent = j == i + 1 or (i == 0 and j == k - 1)
+            if adjacent:
+                # Adjacent edges share one vertex and may touch only there (no fold-back).
+                _, end = segment_distance_end(ax, ay, bx, by, cx, cy, dx, dy)
+                if not end:
+                    return True
+            elif segments_intersect(ax, ay, bx, by, cx, cy, dx, dy):
+                return True
+    return False

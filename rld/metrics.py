@@ -1,0 +1,329 @@
+"""Per-pose metrics of the evaluation protocol (DESIGN.md) and the stability ratio of Huang et
+al. (2009, section 3.5, eq. 5).
+
+Every method is scored by the same functions: lane-polygon IoU, IoU20 (independent of the
+horizon), exact match, per-side divergence (strict, and tolerant of off-boundary points lying on
+the true boundary line) and the six categories, in this order of precedence:
+``failed``, ``gt``, ``diverging_lt20`` (critical), ``near_gt``, ``diverging_ge20``, ``too_short``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from shapely.geometry import Polygon
+
+from rld import geometry as geo
+from rld.simulation import Frame
+
+__all__ = [
+    "CATEGORIES",
+    "CRITICAL_DISTANCE_M",
+    "TOLERANT_DISTANCE_M",
+    "SideDivergence",
+    "PoseScore",
+    "lane_iou",
+    "lane_iou20",
+    "truncate_polyline",
+    "side_divergence",
+    "categorize",
+    "score_lane",
+    "circle_crossing",
+    "stability_ratio",
+]
+
+CATEGORIES = ("gt", "near_gt", "too_short", "diverging_ge20", "diverging_lt20", "failed")
+CRITICAL_DISTANCE_M = 20.0
+TOLERANT_DISTANCE_M = 0.5
+IOU20_HORIZON_M = 20.0
+_PREFIX_WINDOW = 5  # how many boundary cones before the first true one a lane may start with
+
+
+def _iou(a, b) -> float:
+    union = a.union(b).area
+    if union <= 0.0:
+        return math.nan
+    return float(a.intersection(b).area / union)
+
+
+def lane_iou(
+    pred_left: np.ndarray,
+    pred_right: np.ndarray,
+    gt_left: np.ndarray,
+    gt_right: np.ndarray,
+    pred_closed: bool = False,
+    gt_closed: bool = False,
+) -> float:
+    """IoU of the predicted and true lane polygons (left points, then right reversed; invalid
+    polygons repaired with ``shapely.make_valid``). NaN when both have no area."""
+    a = geo.lane_polygon(pred_left, pred_right, closed=pred_closed)
+    b = geo.lane_polygon(gt_left, gt_right, closed=gt_closed)
+    return _iou(a, b)
+
+
+def truncate_polyline(xy: np.ndarray, length_m: float) -> np.ndarray:
+    """The first ``length_m`` metres of arc length of ``xy``, ending on an interpolated point."""
+    xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    if xy.shape[0] < 2:
+        return xy.copy()
+    s = geo.cumulative_length(xy)
+    if s[-1] <= length_m:
+        return xy.copy()
+    k = int(np.searchsorted(s, length_m))  # s[k-1] < length <= s[k]
+    t = (length_m - s[k - 1]) / (s[k] - s[k - 1])
+    end = xy[k - 1] + t * (xy[k] - xy[k - 1])
+    return np.vstack([xy[:k], end])
+
+
+def lane_iou20(
+    pred_left: np.ndarray,
+    pred_right: np.ndarray,
+    gt_left: np.ndarray,
+    gt_right: np.ndarray,
+    heading: np.ndarray,
+) -> float:
+    """IoU20: every boundary cut to its first 20 m of arc length, both polygons clipped to the
+    half-plane ahead of the line through the first true cones, then IoU. NaN without a true
+    lane."""
+    if len(gt_left) == 0 or len(gt_right) == 0:
+        return math.nan
+    pl, pr = (truncate_polyline(x, IOU20_HORIZON_M) for x in (pred_left, pred_right))
+    gl, gr = (truncate_polyline(x, IOU20_HORIZON_M) for x in (gt_left, gt_right))
+    a0, b0 = np.asarray(gt_left[0], float), np.asarray(gt_right[0], float)
+    u = b0 - a0
+    norm = np.hypot(*u)
+    if norm == 0:
+        return math.nan
+    u = u / norm
+    n = np.array([-u[1], u[0]])
+    if n @ heading < 0:
+        n = -n
+    big = 1e4
+    half = Polygon([a0 - big * u, b0 + big * u, b0 + big * u + big * n, a0 - big * u + big * n])
+    a = geo.lane_polygon(pl, pr).intersection(half)
+    b = geo.lane_polygon(gl, gr).intersection(half)
+    return _iou(a, b)
+
+
+@dataclass(frozen=True)
+class SideDivergence:
+    """How one predicted boundary follows the true one.
+
+    ``diverged``: it takes a cone that is not the next true cone (or one past the truth's end).
+    ``distance_m``: arc length along the truth from the car to the last matched true cone
+    (``inf`` when it does not diverge). ``stopped_early``: no divergence, but it ends before the
+    truth does.
+    """
+
+    diverged: bool
+    distance_m: float
+    stopped_early: bool
+    matched: int
+
+
+def side_divergence(
+    pred: np.ndarray,
+    gt: np.ndarray,
+    boundary: np.ndarray,
+    cones: np.ndarray,
+    car_xy: np.ndarray,
+    closed: bool,
+    skippable: np.ndarray | None = None,
+) -> SideDivergence:
+    """Divergence of one predicted side ``pred`` from the truth ``gt`` (index arrays into
+    ``cones``), following DESIGN.md.
+
+    ``boundary`` is the side's whole boundary in order (indices, -1 for cones not in the map),
+    cyclic when ``closed``: ``pred`` may begin with up to five boundary cones that precede
+    ``gt[0]`` (beside or behind the car); its next cone must be ``gt[0]`` or ``gt[1]``; then it
+    must take the next true cone each step. ``skippable`` (bool per cone) marks cones that the
+    tolerant rule passes over instead of diverging.
+    """
+    pred = np.asarray(pred, dtype=np.int64)
+    gt = np.asarray(gt, dtype=np.int64)
+    skip = np.zeros(cones.shape[0], dtype=bool) if skippable is None else skippable
+    pred = pred[~skip[pred]] if pred.size else pred
+
+    def arc_to(j: int) -> float:
+        if j < 0:
+            return 0.0
+        first = float(np.hypot(*(cones[gt[0]] - car_xy)))
+        return first + geo.polyline_length(cones[gt[: j + 1]])
+
+    if pred.size == 0:
+        return SideDivergence(False, math.inf, gt.size > 0, 0)
+    if gt.size == 0:
+        return SideDivergence(True, 0.0, False, 0)
+    pos = {int(c): k for k, c in enumerate(boundary) if c >= 0}
+    n = len(boundary)
+    g0 = pos.get(int(gt[0]))
+    t = 0
+    last = -1
+    while t < pred.size and g0 is not None and int(pred[t]) in pos:
+        back = (g0 - pos[int(pred[t])]) % n if closed else g0 - pos[int(pred[t])]
+        if not 1 <= back <= _PREFIX_WINDOW or (last >= 0 and back >= last):
+            break
+        last = back
+        t += 1
+    if t == pred.size:
+        return SideDivergence(False, math.inf, True, 0)
+    if pred[t] == gt[0]:
+        j = 0
+    elif gt.size > 1 and pred[t] == gt[1]:
+        j = 1
+    else:
+        return SideDivergence(True, 0.0, False, 0)
+    for c in pred[t + 1 :]:
+        if j + 1 < gt.size and c == gt[j + 1]:
+            j += 1
+        else:
+            return SideDivergence(True, arc_to(j), False, j + 1)
+    return SideDivergence(False, math.inf, j + 1 < gt.size, j + 1)
+
+
+def categorize(
+    ok: bool,
+    exact: bool,
+    sides: tuple[SideDivergence, SideDivergence],
+    iou: float,
+    pred_lengths: tuple[float, float],
+    true_lengths: tuple[float, float],
+) -> str:
+    """The protocol's category of one prediction (see the module docstring)."""
+    if not ok:
+        return "failed"
+    if exact:
+        return "gt"
+    diverged = [s for s in sides if s.diverged]
+    if diverged:
+        d = min(s.distance_m for s in diverged)
+        if d < CRITICAL_DISTANCE_M:
+            return "diverging_lt20"
+        return "near_gt" if (not math.isnan(iou) and iou >= 0.9) else "diverging_ge20"
+    for s, lp, lt in zip(sides, pred_lengths, true_lengths, strict=True):
+        if s.stopped_early and lp < 0.5 * lt:
+            return "too_short"
+    return "near_gt"
+
+
+@dataclass(frozen=True)
+class PoseScore:
+    """Every metric of one prediction at one pose."""
+
+    category: str
+    category_tolerant: str
+    iou: float
+    iou20: float
+    exact: bool
+    divergence_m: float
+    divergence_tolerant_m: float
+    pred_length_m: float
+    true_length_m: float
+
+    @property
+    def critical(self) -> bool:
+        return self.category in ("diverging_lt20", "failed")
+
+    @property
+    def critical_tolerant(self) -> bool:
+        return self.category_tolerant in ("diverging_lt20", "failed")
+
+
+def score_lane(
+    frame: Frame, left: np.ndarray, right: np.ndarray, ok: bool = True, closed: bool = False
+) -> PoseScore:
+    """Score a predicted lane (frame indices ``left``, ``right``) against ``frame``'s truth."""
+    cones = frame.cones
+    left = np.asarray(left, dtype=np.int64)
+    right = np.asarray(right, dtype=np.int64)
+    ok = bool(ok) and (left.size > 0 or right.size > 0)
+    gt_closed = frame.gt_closed
+    true_len = (
+        geo.polyline_length(cones[frame.gt_left], gt_closed),
+        geo.polyline_length(cones[frame.gt_right], gt_closed),
+    )
+    pred_len = (
+        geo.polyline_length(cones[left], closed),
+        geo.polyline_length(cones[right], closed),
+    )
+    if not ok:
+        return PoseScore("failed", "failed", 0.0, 0.0, False, 0.0, 0.0, 0.0, float(np.mean(true_len)))
+    iou = lane_iou(cones[left], cones[right], cones[frame.gt_left], cones[frame.gt_right],
+                   closed, gt_closed)
+    iou = 0.0 if math.isnan(iou) else iou
+    iou20 = lane_iou20(cones[left], cones[right], cones[frame.gt_left], cones[frame.gt_right],
+                       frame.pose.heading)
+    exact = (
+        np.array_equal(left, frame.gt_left) and np.array_equal(right, frame.gt_right)
+    )
+    on_boundary = np.zeros(cones.shape[0], dtype=bool)
+    for seq in (frame.left_seq, frame.right_seq):
+        on_boundary[seq[seq >= 0]] = True
+    results = []
+    for tolerant in (False, True):
+        sides = []
+        for pred, gt, seq in ((left, frame.gt_left, frame.left_seq),
+                              (right, frame.gt_right, frame.right_seq)):
+            skip = None
+            if tolerant:
+                line = cones[seq[seq >= 0]]
+                if frame.closed and line.shape[0] > 2:
+                    line = np.vstack([line, line[:1]])
+                near = geo.point_polyline_distance(cones, line) <= TOLERANT_DISTANCE_M
+                skip = ~on_boundary & near
+            sides.append(side_divergence(pred, gt, seq, cones, frame.pose.xy, frame.closed,
+                                         skip))
+        cat = categorize(True, exact, (sides[0], sides[1]), iou, pred_len, true_len)
+        results.append((cat, min(s.distance_m for s in sides)))
+    return PoseScore(
+        category=results[0][0],
+        category_tolerant=results[1][0],
+        iou=iou,
+        iou20=iou20,
+        exact=exact,
+        divergence_m=results[0][1],
+        divergence_tolerant_m=results[1][1],
+        pred_length_m=float(np.mean(pred_len)),
+        true_length_m=float(np.mean(true_len)),
+    )
+
+
+def circle_crossing(line: np.ndarray, center: np.ndarray, radius_m: float) -> np.ndarray | None:
+    """The first point where the polyline ``line``, walked from its start, leaves the circle of
+    ``radius_m`` around ``center`` (Huang et al. 3.5: the lane estimate ahead meets the
+    circle). ``None`` when it never reaches the circle."""
+    line = np.asarray(line, dtype=np.float64)
+    if line.shape[0] < 2:
+        return None
+    d = np.hypot(*(line - center).T)
+    for i in range(line.shape[0] - 1):
+        if d[i] < radius_m <= d[i + 1]:
+            p, q = line[i] - center, line[i + 1] - center
+            u = q - p
+            a, b, c = u @ u, 2 * (p @ u), p @ p - radius_m**2
+            t = (-b + math.sqrt(max(b * b - 4 * a * c, 0.0))) / (2 * a)
+            return line[i] + t * u
+    return None
+
+
+def stability_ratio(
+    line0: np.ndarray,
+    line1: np.ndarray,
+    center: np.ndarray,
+    radius_m: float,
+    travelled_m: float,
+) -> float:
+    """Huang et al. eq. 5: R = ||p0 - p1|| / d_v, where p0 and p1 are where the previous and the
+    new lane estimate (centrelines, from the car forward) cross the circle of ``radius_m``
+    around the car's position ``center`` at the previous step, and d_v the distance the car
+    travelled between the two estimates. NaN when either estimate does not reach the circle or
+    the car did not move."""
+    if travelled_m <= 0:
+        return math.nan
+    p0 = circle_crossing(line0, np.asarray(center, float), radius_m)
+    p1 = circle_crossing(line1, np.asarray(center, float), radius_m)
+    if p0 is None or p1 is None:
+        return math.nan
+    return float(np.hypot(*(p0 - p1)) / travelled_m)

@@ -1,0 +1,188 @@
+"""The evaluation protocol's simulation (DESIGN.md, after CLC section VIII-B).
+
+Along one lap of a track with annotated boundaries:
+
+1. poses every ``step_m`` (1 m) along the ground-truth centreline, heading along its tangent;
+2. a perception field: the half-disc of radius ``range_m`` ahead of the car;
+3. the partial map at pose k: every cone that was inside the field at any pose 0..k (the SLAM
+   map growing during the first lap), unlabelled real cones included;
+4. false positives at rate r: a persistent, seeded set of round(r / (1 - r) * real cones) points,
+   uniform over the union of the fields along the lap; each joins the map once it has been in
+   the field;
+5. the ground-truth lane at pose k: per side, the labelled cones from the one nearest the car
+   (not behind it) forward, up to the first cone not yet in the map;
+6. the method sees the partial map shuffled (seeded per pose), without labels.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from rld.tracks import Track
+from rld.types import Pose
+
+__all__ = ["Frame", "Lap", "simulate_lap", "in_field"]
+
+
+def in_field(points: np.ndarray, xy: np.ndarray, heading: np.ndarray, range_m: float) -> np.ndarray:
+    """Points inside the half-disc of radius ``range_m`` ahead of the car: (P,) for one pose, or
+    (K, P) for (K, 2) positions and headings."""
+    xy = np.atleast_2d(xy)
+    heading = np.atleast_2d(heading)
+    d = points[None, :, :] - xy[:, None, :]
+    ahead = np.einsum("kpi,ki->kp", d, heading) >= 0.0
+    near = np.einsum("kpi,kpi->kp", d, d) <= range_m**2
+    out = ahead & near
+    return out[0] if out.shape[0] == 1 else out
+
+
+@dataclass(frozen=True, eq=False)
+class Frame:
+    """What a method sees at one pose, and the truth to score it against.
+
+    ``cones`` (M, 2) is the partial map, shuffled. ``source`` (M,) tells, for each frame cone,
+    its index in the track's cones, or ``-1 - k`` for false positive k. ``gt_left`` and
+    ``gt_right`` are the ground-truth lane as frame indices; ``left_seq`` and ``right_seq`` are
+    the track's whole boundaries as frame indices (-1 where a cone is not yet in the map), for
+    metrics that need the boundary order beyond the visible lane.
+    """
+
+    index: int
+    pose: Pose
+    cones: np.ndarray
+    source: np.ndarray
+    gt_left: np.ndarray
+    gt_right: np.ndarray
+    left_seq: np.ndarray
+    right_seq: np.ndarray
+    closed: bool
+
+    @property
+    def is_false_positive(self) -> np.ndarray:
+        return self.source < 0
+
+    @property
+    def gt_closed(self) -> bool:
+        """The ground-truth lane is the whole loop on both sides."""
+        return bool(
+            self.closed
+            and self.gt_left.size == self.left_seq.size
+            and self.gt_right.size == self.right_seq.size
+        )
+
+
+class Lap:
+    """One simulated lap (see the module docstring); iterate it for its ``Frame``\\ s."""
+
+    def __init__(
+        self,
+        track: Track,
+        range_m: float = 50.0,
+        fp_rate: float = 0.0,
+        seed: int = 0,
+        step_m: float = 1.0,
+    ) -> None:
+        if not 0.0 <= fp_rate < 1.0:
+            raise ValueError(f"fp_rate must be in [0, 1), got {fp_rate}")
+        if range_m <= 0:
+            raise ValueError(f"range_m must be positive, got {range_m}")
+        self.track = track
+        self.range_m = float(range_m)
+        self.fp_rate = float(fp_rate)
+        self.seed = int(seed)
+        self.centerline = track.centerline(step_m)
+        c = self.centerline
+        if track.closed:
+            tangent = np.roll(c, -1, axis=0) - np.roll(c, 1, axis=0)
+        else:
+            tangent = np.gradient(c, axis=0)
+        self.yaw = np.arctan2(tangent[:, 1], tangent[:, 0])
+        self.headings = np.column_stack([np.cos(self.yaw), np.sin(self.yaw)])
+        n_real = track.cones.shape[0]
+        rng = np.random.default_rng(self.seed)
+        self.false_positives = self._sample_false_positives(
+            int(round(fp_rate / (1.0 - fp_rate) * n_real)), rng
+        )
+        self.all_points = np.vstack([track.cones, self.false_positives])
+        seen = in_field(self.all_points, c, self.headings, self.range_m)  # (K, P)
+        first = np.where(seen.any(axis=0), seen.argmax(axis=0), np.iinfo(np.int64).max)
+        self.first_seen = first.astype(np.int64)
+
+    def _sample_false_positives(self, count: int, rng: np.random.Generator) -> np.ndarray:
+        if count == 0:
+            return np.zeros((0, 2))
+        lo = self.centerline.min(axis=0) - self.range_m
+        hi = self.centerline.max(axis=0) + self.range_m
+        out: list[np.ndarray] = []
+        have = 0
+        while have < count:
+            cand = rng.uniform(lo, hi, size=(max(4 * count, 256), 2))
+            ok = in_field(cand, self.centerline, self.headings, self.range_m).any(axis=0)
+            out.append(cand[ok])
+            have += int(ok.sum())
+        return np.vstack(out)[:count]
+
+    def __len__(self) -> int:
+        return self.centerline.shape[0]
+
+    def __iter__(self) -> Iterator[Frame]:
+        for k in range(len(self)):
+            yield self.frame(k)
+
+    def pose(self, k: int) -> Pose:
+        return Pose(float(self.centerline[k, 0]), float(self.centerline[k, 1]), float(self.yaw[k]))
+
+    def _gt_side(self, side: np.ndarray, in_map: np.ndarray, pose: Pose) -> np.ndarray:
+        """Ground-truth boundary (track indices) at this pose (protocol step 5)."""
+        if side.size == 0:
+            return side
+        xy = self.track.cones[side]
+        d = xy - pose.xy
+        ok = in_map[side] & (d @ pose.heading >= 0.0)
+        if not ok.any():
+            return side[:0]
+        dist = np.where(ok, np.hypot(d[:, 0], d[:, 1]), np.inf)
+        start = int(np.argmin(dist))
+        n = side.size
+        out = []
+        for step in range(n if self.track.closed else n - start):
+            k = (start + step) % n
+            if not in_map[side[k]]:
+                break
+            out.append(side[k])
+        return np.array(out, dtype=np.int64)
+
+    def frame(self, k: int) -> Frame:
+        """The frame at pose ``k``."""
+        pose = self.pose(k)
+        in_map = self.first_seen <= k
+        n_real = self.track.cones.shape[0]
+        gt_l = self._gt_side(self.track.left, in_map[:n_real], pose)
+        gt_r = self._gt_side(self.track.right, in_map[:n_real], pose)
+        members = np.flatnonzero(in_map)
+        rng = np.random.default_rng([self.seed, k])
+        members = members[rng.permutation(members.size)]
+        to_frame = np.full(self.all_points.shape[0], -1, dtype=np.int64)
+        to_frame[members] = np.arange(members.size)
+        source = np.where(members < n_real, members, -1 - (members - n_real))
+        return Frame(
+            index=k,
+            pose=pose,
+            cones=np.ascontiguousarray(self.all_points[members]),
+            source=source,
+            gt_left=to_frame[gt_l],
+            gt_right=to_frame[gt_r],
+            left_seq=to_frame[self.track.left],
+            right_seq=to_frame[self.track.right],
+            closed=self.track.closed,
+        )
+
+
+def simulate_lap(
+    track: Track, range_m: float = 50.0, fp_rate: float = 0.0, seed: int = 0, step_m: float = 1.0
+) -> Lap:
+    """Set up the protocol's lap over ``track`` (see ``Lap``)."""
+    return Lap(track, range_m=range_m, fp_rate=fp_rate, seed=seed, step_m=step_m)

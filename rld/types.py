@@ -1,0 +1,287 @@
+"""Value types of the public API: ``Pose``, ``LaneParams``, ``LaneStatus``, ``Lane``.
+
+Validation of user input happens once, here, at the API edge (``as_cones``, ``as_pose``): a
+malformed input raises ``ValueError`` naming the problem; everything behind the edge may assume
+clean ``float64`` arrays.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "Pose",
+    "LaneParams",
+    "LaneStatus",
+    "Lane",
+    "as_cones",
+    "as_pose",
+    "MIN_CONES",
+]
+
+#: Fewest cones that can form a lane: two boundaries of at least two cones each.
+MIN_CONES = 4
+
+
+@dataclass(frozen=True)
+class Pose:
+    """The car's pose in the map frame: position ``x``, ``y`` in metres, ``yaw`` in radians
+    (counter-clockwise from the map's x axis)."""
+
+    x: float
+    y: float
+    yaw: float
+
+    @property
+    def xy(self) -> np.ndarray:
+        """Position as a (2,) float array, metres."""
+        return np.array([self.x, self.y], dtype=np.float64)
+
+    @property
+    def heading(self) -> np.ndarray:
+        """Unit heading vector h_c (RLD eq. 25), as a (2,) float array."""
+        return np.array([math.cos(self.yaw), math.sin(self.yaw)], dtype=np.float64)
+
+    def to_local(self, points: np.ndarray) -> np.ndarray:
+        """Map-frame points (k, 2) to the car frame: x forward, y to the left, metres."""
+        d = np.asarray(points, dtype=np.float64) - self.xy
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        return np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]])
+
+
+def as_pose(pose: Pose | Sequence[float] | np.ndarray) -> Pose:
+    """Validate ``pose`` (a ``Pose`` or three numbers ``x, y, yaw``) and return a ``Pose``.
+
+    Raises ``ValueError`` when it has the wrong length or a non-finite value.
+    """
+    if isinstance(pose, Pose):
+        values = (pose.x, pose.y, pose.yaw)
+    else:
+        try:
+            arr = np.asarray(pose, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"pose must be (x, y, yaw) numbers, got {pose!r}") from exc
+        if arr.shape != (3,):
+            raise ValueError(f"pose must have 3 values (x, y, yaw), got {arr.size}")
+        values = tuple(float(v) for v in arr)
+    if not all(math.isfinite(v) for v in values):
+        raise ValueError(f"pose has a non-finite value: {values}")
+    return Pose(*values)
+
+
+def as_cones(cones: Any, min_cones: int = MIN_CONES) -> np.ndarray:
+    """Validate ``cones`` (array-like of shape (N, 2), metres) and return a C-contiguous
+    ``float64`` copy.
+
+    Raises ``ValueError`` on a wrong shape, a non-numeric or non-finite entry, or fewer than
+    ``min_cones`` cones (a lane needs two cones per boundary).
+    """
+    try:
+        arr = np.array(cones, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"cones must be numeric with shape (N, 2): {exc}") from exc
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise ValueError(f"cones must have shape (N, 2), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        bad = np.flatnonzero(~np.all(np.isfinite(arr), axis=1))
+        raise ValueError(
+            f"cones contain NaN or inf at rows {bad[:10].tolist()}"
+            + (" ..." if bad.size > 10 else "")
+        )
+    if arr.shape[0] < min_cones:
+        raise ValueError(
+            f"need at least {min_cones} cones for a lane (two per boundary), got {arr.shape[0]}"
+        )
+    return np.ascontiguousarray(arr)
+
+
+@dataclass(frozen=True)
+class LaneParams:
+    """Every tunable of both methods, in one frozen object. Units are in the names.
+
+    Defaults come from the Formula Student rules, the CLC paper (Ivanov & Markgraf 2024,
+    section VIII-C) and the RLD paper (Brandes et al. 2020, section II); the RLD weights
+    and tolerances are not printed in that paper and are our choice (see docs/formulation.md).
+    """
+
+    max_cone_spacing_m: float = 5.5
+    """Longest edge between consecutive cones of one boundary (CLC d_max, eq. 2; the rules
+    say 5 m, the dataset has up to 5.2 m)."""
+    min_width_m: float = 2.5
+    """Narrowest lane (CLC w_min, eq. 13; RLD d_min, eq. 7). The rules guarantee 3 m."""
+    max_width_m: float = 6.5
+    """Widest lane (CLC w_max, eq. 13)."""
+    max_turn_angle_rad: float = math.pi / 2
+    """Largest absolute turn between consecutive segments of a boundary (CLC phi_max, eq. 15).
+    With theta_e = pi it is also RLD's critical angle cost t_crit (eq. 28)."""
+    expected_spacing_m: float = 3.5
+    """RLD d_e (eq. 18): the expected distance between consecutive cones of one side."""
+    spacing_tolerance_m: float = 2.0
+    """RLD d_t (eq. 18): the spacing deviation that costs 1."""
+    angle_tolerance_rad: float = 1.0
+    """RLD theta_t (eq. 20): the turn angle that costs 1 (theta_e = pi, a straight line)."""
+    max_spacing_cost: float = 4.0
+    """RLD s_crit (eq. 27): edges with a larger spacing cost are excluded. With the defaults it
+    rules out edges shorter than 0.67 m."""
+    w_spacing: float = 1.0
+    """RLD w_s (eq. 29)."""
+    w_angle: float = 1.0
+    """RLD w_t (eq. 29)."""
+    w_heading: float = 1.0
+    """RLD w_p (eq. 29)."""
+    w_benefit: float = 2.5
+    """RLD w_b (eq. 29): the reward for every chosen edge."""
+    heading_radius_m: float = 4.0
+    """RLD d_h (eq. 9): edges whose nearest point is this close to the car count for h."""
+    heading_tolerance_rad: float = math.pi / 4
+    """RLD theta_heading (eq. 9): most an edge near the car may deviate from the heading."""
+    heading_min_distance_m: float = 1.0
+    """Floor on d_car in the heading cost (RLD eq. 25) so an edge passing under the car does not
+    divide by zero. Our addition."""
+    near_radius_m: float = 4.5
+    """RLD d_near (eqs 11-12) and the CLC start-vertex search radius (IV-C): the first cone of
+    each boundary lies within this distance of the car."""
+    far_endpoint_max_m: float = 10.0
+    """RLD d_max of eq. 17: the most the two far endpoints may be apart."""
+    max_iterations: int = 2500
+    """CLC it_max (Alg. 2)."""
+    max_cones: int = 20
+    """How many map cones, nearest ahead of the car, RLD's program takes."""
+
+    def __post_init__(self) -> None:
+        for name, value in self.__dict__.items():
+            if not isinstance(value, int | float) or not math.isfinite(float(value)):
+                raise ValueError(f"LaneParams.{name} must be a finite number, got {value!r}")
+            if value <= 0:
+                raise ValueError(f"LaneParams.{name} must be positive, got {value!r}")
+        if self.min_width_m >= self.max_width_m:
+            raise ValueError("LaneParams.min_width_m must be below max_width_m")
+        if self.max_turn_angle_rad > math.pi:
+            raise ValueError("LaneParams.max_turn_angle_rad must be at most pi")
+        if int(self.max_cones) < 4:
+            raise ValueError("LaneParams.max_cones must be at least 4")
+
+    @property
+    def max_angle_cost(self) -> float:
+        """RLD t_crit (eq. 28), derived so that eq. 28 and the turn limit C_seg coincide:
+        t_crit = (phi_max / theta_t)^4."""
+        return (self.max_turn_angle_rad / self.angle_tolerance_rad) ** 4
+
+
+class LaneStatus(enum.Enum):
+    """Outcome of one solve.
+
+    ``OPTIMAL`` and ``FEASIBLE`` carry a lane; the others carry none and say why.
+    """
+
+    OPTIMAL = "optimal"
+    """The method's own criterion is proved optimal (or, for a search, the search is complete)."""
+    FEASIBLE = "feasible"
+    """A valid lane, but the budget ran out before optimality (or completeness) was shown."""
+    NOT_FOUND = "not_found"
+    """No lane: the method found none (no start cones near the car, no feasible pair, ...)."""
+    INFEASIBLE = "infeasible"
+    """No lane: the program was proved to have no solution."""
+    TIMEOUT = "timeout"
+    """No lane: the time budget ran out before any lane was found."""
+
+    @property
+    def ok(self) -> bool:
+        return self in (LaneStatus.OPTIMAL, LaneStatus.FEASIBLE)
+
+
+_EMPTY = np.zeros(0, dtype=np.int64)
+
+
+@dataclass(frozen=True, eq=False)
+class Lane:
+    """The driving lane found in ``cones``: two ordered index sequences, from the car forward.
+
+    Everything else (``left_xy``, ``right_xy``, ``centerline``, ``polygon``) is derived from the
+    indices and the cones; a ``Lane`` never holds coordinates of its own. A lane that was not
+    found has empty ``left`` and ``right`` and a ``status`` and ``message`` saying why.
+    """
+
+    cones: np.ndarray
+    left: np.ndarray = field(default_factory=lambda: _EMPTY.copy())
+    right: np.ndarray = field(default_factory=lambda: _EMPTY.copy())
+    status: LaneStatus = LaneStatus.NOT_FOUND
+    message: str = ""
+    cost: float = math.nan
+    closed: bool = False
+    stats: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        cones = np.asarray(self.cones, dtype=np.float64)
+        left = np.asarray(self.left, dtype=np.int64).reshape(-1)
+        right = np.asarray(self.right, dtype=np.int64).reshape(-1)
+        object.__setattr__(self, "cones", cones)
+        object.__setattr__(self, "left", left)
+        object.__setattr__(self, "right", right)
+        n = cones.shape[0]
+        for name, idx in (("left", left), ("right", right)):
+            if idx.size and (idx.min() < 0 or idx.max() >= n):
+                raise ValueError(f"Lane.{name} has an index outside 0..{n - 1}")
+            if np.unique(idx).size != idx.size:
+                raise ValueError(f"Lane.{name} visits a cone twice")
+        if np.intersect1d(left, right).size:
+            raise ValueError("Lane.left and Lane.right share a cone")
+        if not self.status.ok and (left.size or right.size):
+            raise ValueError(f"a lane with status {self.status.name} must be empty")
+        if self.status.ok and (left.size == 0 or right.size == 0):
+            raise ValueError(f"a lane with status {self.status.name} needs both boundaries")
+
+    @classmethod
+    def not_found(
+        cls,
+        cones: np.ndarray,
+        message: str,
+        status: LaneStatus = LaneStatus.NOT_FOUND,
+        stats: dict | None = None,
+    ) -> Lane:
+        """An empty lane saying why none was found."""
+        return cls(cones=cones, status=status, message=message, stats=dict(stats or {}))
+
+    @property
+    def ok(self) -> bool:
+        """True when a lane was found."""
+        return self.status.ok
+
+    @property
+    def left_xy(self) -> np.ndarray:
+        """(k, 2) positions of the left boundary, metres, from the car forward."""
+        return self.cones[self.left]
+
+    @property
+    def right_xy(self) -> np.ndarray:
+        """(k, 2) positions of the right boundary, metres, from the car forward."""
+        return self.cones[self.right]
+
+    @property
+    def centerline(self) -> np.ndarray:
+        """(m, 2) midpoints between the boundaries (see ``rld.geometry.centerline``)."""
+        from rld.geometry import centerline
+
+        if not self.ok:
+            return np.zeros((0, 2))
+        return centerline(self.left_xy, self.right_xy, closed=self.closed)
+
+    @property
+    def polygon(self):
+        """The driving lane as a shapely geometry (see ``rld.geometry.lane_polygon``)."""
+        from rld.geometry import lane_polygon
+
+        return lane_polygon(self.left_xy, self.right_xy, closed=self.closed)
+
+    def __repr__(self) -> str:
+        return (
+            f"Lane(status={self.status.name}, left={self.left.tolist()}, "
+            f"right={self.right.tolist()}, cost={self.cost:.4g}, closed={self.closed}, "
+            f"message={self.message!r})"
+        )
