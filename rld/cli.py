@@ -5,7 +5,6 @@ from __future__ import annotations
 import sys
 
 import click
-import numpy as np
 
 from rld.api import DEFAULT_METHOD, METHODS, solve_lane
 from rld.types import Pose
@@ -15,7 +14,8 @@ def _parse_pose(text: str) -> Pose:
     try:
         x, y, yaw = (float(v) for v in text.split(","))
     except ValueError as exc:
-        raise click.BadParameter(f"expected x,y,yaw (metres, metres, radians), got {text!r}") from exc
+        msg = f"expected x,y,yaw (metres, metres, radians), got {text!r}"
+        raise click.BadParameter(msg) from exc
     return Pose(x, y, yaw)
 
 
@@ -24,7 +24,8 @@ def _summary(lane, elapsed_ms: float | None = None) -> str:
 
     lines = [f"status      {lane.status.name}" + (f" ({lane.message})" if lane.message else "")]
     if lane.ok:
-        for name, idx, xy in (("left", lane.left, lane.left_xy), ("right", lane.right, lane.right_xy)):
+        sides = (("left", lane.left, lane.left_xy), ("right", lane.right, lane.right_xy))
+        for name, idx, xy in sides:
             lines.append(
                 f"{name:<11} {idx.size:3d} cones, {geo.polyline_length(xy, lane.closed):6.1f} m: "
                 f"{idx.tolist()}"

@@ -269,7 +269,8 @@ def find_starting_vertices(
     Candidates lie within ``radius_m`` of the car (RLD's near-car mask r, eq. 11); the left one
     at a positive angle from the heading, the right one at a negative angle. Of all pairs, the
     one most symmetric about the car's line wins: the mirror image of the left cone across that
-    line is nearest the right cone. Ties go to the lower indices. ``None`` when a side has no
+    line is nearest the right cone. Ties go to the pair nearest the car, then to the lower
+    indices. ``None`` when a side has no
     candidate.
     """
     near = np.flatnonzero(near_car_mask(points, pose, radius_m))
@@ -281,5 +282,9 @@ def find_starting_vertices(
         return None
     ll, rl = local[local[:, 1] > 0], local[local[:, 1] < 0]
     asym = np.hypot(ll[:, None, 0] - rl[None, :, 0], ll[:, None, 1] + rl[None, :, 1])
-    k = int(np.argmin(asym))  # row-major: lowest left index first, then right
-    return int(lefts[k // rights.size]), int(rights[k % rights.size])
+    reach = np.hypot(ll[:, 0], ll[:, 1])[:, None] + np.hypot(rl[:, 0], rl[:, 1])[None, :]
+    li, ri = np.meshgrid(lefts, rights, indexing="ij")
+    # Most symmetric first; among equals (to a micrometre) the pair nearest the car, then the
+    # lowest indices, so the choice does not depend on the order of the input.
+    k = np.lexsort((ri.ravel(), li.ravel(), reach.ravel(), np.round(asym.ravel(), 6)))[0]
+    return int(li.ravel()[k]), int(ri.ravel()[k])

@@ -1,14 +1,15 @@
 """A seeded generator of closed, rules-compliant Formula Student circuits.
 
-The centreline is a periodic cubic spline through control points on a jittered stadium (two
-long straights joined by turns), with hairpins (a control point pulled deep into the infield)
-and chicanes (alternating lateral offsets on a straight) inserted at random. A candidate is
-kept only when it satisfies every rule below, on the noise-free cone positions:
+The centreline is a loop of circular corners joined by straights: ordinary corners (9-30 m
+radius), hairpins (160-190 degrees on a 6.5-9 m radius), chicanes (a left-right pair) and now
+and then a corner against the loop's sense, in random order; the straights' lengths are adjusted
+by the least absolute change (a small linear program) so the loop closes. A candidate is kept
+only when it satisfies every rule below, on the noise-free cone positions:
 
 - the centreline is closed and simple, and distinct parts of the track keep at least
   ``GAP_M`` metres of infield between their boundaries;
 - the centreline's turn radius is at least ``MIN_RADIUS_M`` (FS hairpins: outer diameter
-  of at least 9 m);
+  of at least 9 m, so 4.5 m plus half the width);
 - the lane width is within [3, 5] m everywhere (it varies smoothly along the lap); measured on
   the cones with the CLC matching lines, within ``CHORD_TOL_M`` of that range;
 - consecutive cones of one boundary are 1-5 m apart, tighter in corners;
@@ -23,7 +24,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.interpolate import splev, splprep
+from scipy.optimize import linprog
 
 from rld import geometry as geo
 from rld.tracks import Track
@@ -39,46 +40,86 @@ __all__ = [
 
 MIN_WIDTH_M, MAX_WIDTH_M = 3.0, 5.0
 MIN_SPACING_M, MAX_SPACING_M = 1.0, 5.0
-MIN_RADIUS_M = 5.0
+MIN_RADIUS_M = 6.0
 GAP_M = 3.0
 #: Cones stand on the boundary lines; the chords between them cut corners, so the width
 #: measured on the cones (CLC matching lines) may differ from the nominal one by this much.
 CHORD_TOL_M = 0.25
 
 
-def _candidate_centerline(rng: np.random.Generator) -> np.ndarray:
-    """Control points of one candidate circuit, counter-clockwise."""
-    straight = rng.uniform(40.0, 110.0)
-    radius = rng.uniform(14.0, 30.0)
-    n_arc, n_straight = 6, max(3, int(straight / 15))
-    pts = []
-    for k in range(n_straight):  # bottom straight, left to right
-        pts.append((-straight / 2 + straight * k / n_straight, -radius))
-    for k in range(n_arc):  # right turn-around
-        a = -math.pi / 2 + math.pi * k / n_arc
-        pts.append((straight / 2 + radius * math.cos(a), radius * math.sin(a)))
-    for k in range(n_straight):  # top straight, right to left
-        pts.append((straight / 2 - straight * k / n_straight, radius))
-    for k in range(n_arc):  # left turn-around
-        a = math.pi / 2 + math.pi * k / n_arc
-        pts.append((-straight / 2 + radius * math.cos(a), radius * math.sin(a)))
-    pts = np.array(pts)
-    # Radial jitter gives curvy sections.
-    centre_dir = pts / np.linalg.norm(pts, axis=1, keepdims=True)
-    pts = pts + centre_dir * rng.normal(0.0, 0.12 * radius, size=(len(pts), 1))
-    m = len(pts)
-    # Hairpin: pull one control point deep towards the middle.
-    if rng.random() < 0.7:
-        k = int(rng.integers(m))
-        pts[k] = pts[k] * rng.uniform(0.15, 0.45)
-    # Chicane: alternate lateral offsets on one straight.
-    if rng.random() < 0.7:
-        k = int(rng.integers(1, max(2, n_straight - 2)))
-        amp = rng.uniform(3.0, 6.0)
-        pts[k, 1] += amp
-        if k + 1 < n_straight:
-            pts[k + 1, 1] -= amp
-    return pts
+def _corners(rng: np.random.Generator) -> list[tuple[float, float]]:
+    """The circuit's corners as (signed turn in radians, centreline radius in metres), in driving
+    order, turning 2 pi in all (counter-clockwise). Hairpins turn 160-190 degrees on a 6.5-9 m
+    radius; chicanes are a left-right pair of 30-60 degrees; the rest are ordinary corners."""
+    groups: list[list[tuple[float, float]]] = []
+    negative = 0.0
+    for _ in range(int(rng.integers(0, 3))):  # chicanes
+        a = math.radians(rng.uniform(30, 60))
+        r = rng.uniform(9, 15)
+        pair = [(a, r), (-a, r)] if rng.random() < 0.5 else [(-a, r), (a, r)]
+        groups.append(pair)
+    for _ in range(int(rng.integers(0, 2))):  # a corner against the loop's sense
+        a = math.radians(rng.uniform(40, 100))
+        negative += a
+        groups.append([(-a, rng.uniform(10, 25))])
+    budget = 2 * math.pi + negative
+    if rng.random() < 0.7:  # a hairpin
+        a = math.radians(rng.uniform(160, 190))
+        budget -= a
+        groups.append([(a, rng.uniform(6.5, 9.0))])
+    m = int(rng.integers(3, 7))
+    for a in rng.dirichlet(np.full(m, 2.0)) * budget:
+        groups.append([(float(a), rng.uniform(9, 30) if a < math.radians(150) else 8.0)])
+    order = rng.permutation(len(groups))
+    return [c for k in order for c in groups[k]]
+
+
+def _centerline_from_corners(corners, rng) -> np.ndarray | None:
+    """Arcs for the corners joined by straights whose lengths are adjusted (least change) so the
+    loop closes; ``None`` when no straights of 3-90 m close it."""
+    heading = 0.0
+    arcs = []  # displacement of each arc
+    dirs = []  # unit direction of each straight (one before every corner)
+    for turn, radius in corners:
+        dirs.append((math.cos(heading), math.sin(heading)))
+        # Chord of the arc: length 2 r sin(|turn| / 2) along the mean heading.
+        mean = heading + turn / 2
+        chord = 2 * radius * math.sin(abs(turn) / 2)
+        arcs.append((chord * math.cos(mean), chord * math.sin(mean)))
+        heading += turn
+    U = np.array(dirs).T  # (2, k)
+    A = np.sum(arcs, axis=0)
+    k = U.shape[1]
+    L0 = rng.uniform(6.0, 45.0, size=k)
+    # Least absolute change of the straights (3-90 m) that closes the loop: U L = -A.
+    # Variables [L, t] with t >= |L - L0|; minimise sum(t).
+    res = linprog(
+        c=np.concatenate([np.zeros(k), np.ones(k)]),
+        A_ub=np.block([[np.eye(k), -np.eye(k)], [-np.eye(k), -np.eye(k)]]),
+        b_ub=np.concatenate([L0, -L0]),
+        A_eq=np.hstack([U, np.zeros((2, k))]),
+        b_eq=-A,
+        bounds=[(3.0, 90.0)] * k + [(0, None)] * k,
+        method="highs",
+    )
+    if res.status != 0:
+        return None
+    L = res.x[:k]
+    pts = [np.zeros(2)]
+    heading = 0.0
+    for (turn, radius), length in zip(corners, L, strict=True):
+        d = np.array([math.cos(heading), math.sin(heading)])
+        n = max(int(length / 0.25), 1)
+        pts.extend(pts[-1] + d * length * np.arange(1, n + 1)[:, None] / n)
+        side = 1.0 if turn > 0 else -1.0
+        centre = pts[-1] + side * radius * np.array([-d[1], d[0]])
+        start = math.atan2(*(pts[-1] - centre)[::-1])
+        k = max(int(abs(turn) * radius / 0.25), 2)
+        ang = start + turn * np.arange(1, k + 1) / k
+        pts.extend(centre + radius * np.column_stack([np.cos(ang), np.sin(ang)]))
+        heading += turn
+    c = np.array(pts[:-1])
+    return c - c.mean(axis=0)
 
 
 def _boundary_cones(line: np.ndarray, curvature: np.ndarray) -> np.ndarray:
@@ -88,7 +129,7 @@ def _boundary_cones(line: np.ndarray, curvature: np.ndarray) -> np.ndarray:
     seg = np.hypot(*np.diff(np.vstack([line, line[:1]]), axis=0).T)
     spacing = np.clip(4.8 / (1.0 + 9.0 * np.abs(curvature)), 1.5, 4.8)
     count = np.concatenate([[0.0], np.cumsum(seg / spacing)])  # cones "due" along the line
-    n = max(int(round(count[-1])), 3)
+    n = max(int(math.ceil(count[-1])), 3)  # rounding up keeps every gap <= its nominal
     targets = np.arange(n) * (count[-1] / n)
     return np.minimum(np.searchsorted(count, targets), line.shape[0] - 1)
 
@@ -100,14 +141,10 @@ def _signed_curvature(xy: np.ndarray) -> np.ndarray:
     return num / np.maximum(np.hypot(d1[:, 0], d1[:, 1]) ** 3, 1e-12)
 
 
-def _try_build(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray] | None:
-    ctrl = _candidate_centerline(rng)
-    try:
-        tck, _ = splprep([ctrl[:, 0], ctrl[:, 1]], s=0.0, per=True, k=3)
-    except Exception:  # noqa: BLE001 (scipy raises plain errors on degenerate input)
+def _try_build(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    c = _centerline_from_corners(_corners(rng), rng)
+    if c is None:
         return None
-    u = np.linspace(0, 1, 4000, endpoint=False)
-    c = np.column_stack(splev(u, tck))
     c = geo.resample_polyline(c, 0.25, closed=True)
     if not geo.ring_is_simple(c[::4]):
         return None
@@ -124,7 +161,7 @@ def _try_build(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray] | None
     left_line = c + normal * (width[:, None] / 2)
     right_line = c - normal * (width[:, None] / 2)
     # Distinct parts of the track must stay apart: any two centreline points further than
-    # a quarter lap along the track must be at least width + gap apart.
+    # 15 m apart along the track must be at least the widest lane plus GAP_M apart.
     step = 8
     sub = c[::step]
     d = np.hypot(*(sub[:, None, :] - sub[None, :, :]).transpose(2, 0, 1))
@@ -136,7 +173,7 @@ def _try_build(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray] | None
         return None
     li = _boundary_cones(left_line, kappa)
     ri = _boundary_cones(right_line, kappa)
-    return left_line[li], right_line[ri]
+    return left_line[li], right_line[ri], c
 
 
 def generate_track(
@@ -149,14 +186,15 @@ def generate_track(
     ``noise_m`` is the standard deviation of the Gaussian noise on every cone position, metres;
     ``None`` draws it uniformly from [0.1, 0.3]; 0 gives the noise-free layout. The car starts
     at the first cones of both boundaries and drives in list order (counter-clockwise).
-    ``meta`` holds the noise, the noise-free cone positions and the seed.
+    ``meta`` holds the seed, the noise, the noise-free cone positions and the design centreline
+    (every 0.25 m).
     """
     rng = np.random.default_rng(seed)
     for _ in range(max_tries):
         built = _try_build(rng)
         if built is None:
             continue
-        left, right = built
+        left, right, design = built
         if not _rules_hold(left, right):
             continue
         sigma = rng.uniform(0.1, 0.3) if noise_m is None else float(noise_m)
@@ -171,7 +209,12 @@ def generate_track(
             np.arange(nl, clean.shape[0]),
             closed=True,
             name=f"generated seed {seed}",
-            meta={"seed": seed, "noise_m": sigma, "clean_cones": clean},
+            meta={
+                "seed": seed,
+                "noise_m": sigma,
+                "clean_cones": clean,
+                "design_centerline": design,
+            },
         )
     raise RuntimeError(f"no valid track after {max_tries} tries (seed {seed})")
 

@@ -249,7 +249,8 @@ def score_lane(
         geo.polyline_length(cones[right], closed),
     )
     if not ok:
-        return PoseScore("failed", "failed", 0.0, 0.0, False, 0.0, 0.0, 0.0, float(np.mean(true_len)))
+        mean_true = float(np.mean(true_len))
+        return PoseScore("failed", "failed", 0.0, 0.0, False, 0.0, 0.0, 0.0, mean_true)
     iou = lane_iou(cones[left], cones[right], cones[frame.gt_left], cones[frame.gt_right],
                    closed, gt_closed)
     iou = 0.0 if math.isnan(iou) else iou

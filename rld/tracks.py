@@ -19,10 +19,37 @@ import yaml
 
 from rld import geometry as geo
 
-__all__ = ["Track", "load_dataset_track", "read_csv", "write_csv", "load_map", "DATASET_DIR"]
+__all__ = [
+    "Track",
+    "load_dataset_track",
+    "read_csv",
+    "write_csv",
+    "load_map",
+    "find_dataset_dir",
+    "DATASET_TRACKS",
+]
 
-#: Where the shared dataset lives relative to the repository (used by tests and notebooks).
-DATASET_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "fsd_racetrack_dataset"
+#: The dataset's place beside a checkout of this repository: ``../shared/data/...``.
+_DATASET_REL = Path("shared") / "data" / "fsd_racetrack_dataset"
+#: The track numbers of the shared subset.
+DATASET_TRACKS = (1, 2, 3, 4, 6, 7)
+
+
+def find_dataset_dir() -> Path | None:
+    """The racetrack dataset folder: ``$RLD_DATASET_DIR`` when set, else ``../shared/data/
+    fsd_racetrack_dataset`` beside the working directory or beside this checkout. ``None``
+    when none exists (tests and notebooks then skip the dataset cases)."""
+    import os
+
+    candidates = []
+    if os.environ.get("RLD_DATASET_DIR"):
+        candidates.append(Path(os.environ["RLD_DATASET_DIR"]))
+    candidates.append(Path.cwd().parent / _DATASET_REL)
+    candidates.append(Path(__file__).resolve().parents[2] / _DATASET_REL)
+    for c in candidates:
+        if (c / "boundaries_1.yaml").exists() or any(c.glob("boundaries_*.yaml")):
+            return c
+    return None
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,0 +1,92 @@
+import math
+
+import numpy as np
+import pytest
+
+import rld
+from rld import Lane, LaneParams, LaneSolver, LaneStatus, Pose, solve_lane
+from rld.api import METHODS
+
+# A straight lane 4 m wide, cones 3 m apart, plus two stray cones.
+LEFT = np.column_stack([np.arange(0, 30, 3.0), np.full(10, 2.0)])
+RIGHT = np.column_stack([np.arange(0, 30, 3.0), np.full(10, -2.0)])
+STRAY = np.array([[15.0, 9.0], [-20.0, -9.0]])
+CONES = np.vstack([LEFT, RIGHT, STRAY])
+POSE = (1.0, 0.0, 0.0)
+
+
+def test_public_surface():
+    assert set(rld.__all__) == {"solve_lane", "LaneSolver", "LaneParams", "Lane", "LaneStatus",
+                                "Pose"}
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_every_method_finds_a_clean_straight_lane(method):
+    lane = solve_lane(CONES, POSE, method=method)
+    assert isinstance(lane, Lane) and lane.ok
+    assert lane.left.tolist() == list(range(1, 10)) or lane.left.tolist() == list(range(10))
+    assert lane.right.tolist() == list(range(11, 20)) or lane.right.tolist() == list(range(10, 20))
+    assert lane.stats["method"] == method
+    assert lane.stats["solve_time_s"] >= 0
+    assert lane.stats["n_cones"] == len(CONES)
+
+
+def test_unknown_methods_are_refused():
+    for name in ("rld-typo", "", "RLD"):
+        with pytest.raises(ValueError, match="unknown method"):
+            solve_lane(CONES, POSE, method=name)
+    # Methods still to land are not silently replaced by something else.
+    for name in ("rld", "clc"):
+        if name not in METHODS:
+            with pytest.raises(ValueError, match="not implemented yet"):
+                solve_lane(CONES, POSE, method=name)
+
+
+@pytest.mark.parametrize(
+    "cones, pose, match",
+    [
+        (CONES[:3], POSE, "at least 4"),
+        (np.vstack([CONES, [[np.nan, 0]]]), POSE, "NaN"),
+        (CONES[:, :1], POSE, "shape"),
+        (CONES, (0, 0), "3 values"),
+        (CONES, (0, math.inf, 0), "non-finite"),
+    ],
+)
+def test_bad_input_is_a_value_error(cones, pose, match):
+    with pytest.raises(ValueError, match=match):
+        solve_lane(cones, pose)
+
+
+def test_pose_far_from_every_cone_is_an_explicit_no_lane():
+    lane = solve_lane(CONES, (500.0, 500.0, 0.0))
+    assert not lane.ok and lane.status is LaneStatus.NOT_FOUND
+    assert "near_radius_m" in lane.message
+    assert lane.left.size == 0 and lane.right.size == 0
+
+
+def test_options_are_validated():
+    with pytest.raises(ValueError, match="backend"):
+        LaneSolver(backend="cpsat")
+    with pytest.raises(ValueError, match="one label per cone"):
+        solve_lane(CONES, POSE, colors=[0, 1])
+    with pytest.raises(ValueError, match="unknown colour"):
+        solve_lane(CONES, POSE, colors=["blue"] * len(CONES))
+    with pytest.raises(ValueError, match="time_limit_s"):
+        solve_lane(CONES, POSE, time_limit_s=0)
+    with pytest.raises(ValueError, match="LaneParams"):
+        LaneSolver(params={"min_width_m": 3})
+    ok = solve_lane(CONES, Pose(*POSE), colors=["left"] * 10 + ["right"] * 10 + ["unknown"] * 2)
+    assert ok.ok
+
+
+def test_solver_is_reusable_and_deterministic():
+    solver = LaneSolver(params=LaneParams())
+    rng = np.random.default_rng(0)
+    first = solver.solve(CONES, POSE)
+    for _ in range(3):
+        perm = rng.permutation(len(CONES))
+        lane = solver.solve(CONES[perm], POSE)
+        # The same cones are chosen whatever the input order.
+        np.testing.assert_array_equal(perm[lane.left], first.left)
+        np.testing.assert_array_equal(perm[lane.right], first.right)
+    assert solver.previous is lane

@@ -1,0 +1,43 @@
+import numpy as np
+from click.testing import CliRunner
+
+from rld.cli import main
+from rld.tracks import Track, write_csv
+
+
+def test_demo_prints_a_summary_and_writes_a_plot(tmp_path):
+    out = tmp_path / "lane.png"
+    result = CliRunner().invoke(main, ["demo", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    for word in ("track", "frame", "status", "score", "IoU"):
+        assert word in result.output
+    assert out.exists() and out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_solve_reads_a_csv_map(tmp_path):
+    xs = np.arange(0, 30, 3.0)
+    cones = np.vstack([np.column_stack([xs, np.full(10, 2.0)]),
+                       np.column_stack([xs, np.full(10, -2.0)])])
+    path = tmp_path / "map.csv"
+    write_csv(Track(cones, np.arange(20), np.arange(10), np.arange(10, 20), closed=False), path)
+    plot = tmp_path / "s.png"
+    result = CliRunner().invoke(main, ["solve", str(path), "--pose", "1,0,0", "--plot", str(plot)])
+    assert result.exit_code == 0, result.output
+    assert "FEASIBLE" in result.output and plot.exists()
+
+
+def test_solve_reads_a_dataset_map(dataset_dir):
+    result = CliRunner().invoke(
+        main, ["solve", str(dataset_dir / "cone_map_1.yaml"), "--pose", "5,-2,0"]
+    )
+    assert result.exit_code in (0, 1), result.output
+    assert "136 cones" in result.output
+
+
+def test_solve_reports_bad_input(tmp_path):
+    path = tmp_path / "few.csv"
+    path.write_text("x,y\n0,0\n1,1\n")
+    result = CliRunner().invoke(main, ["solve", str(path), "--pose", "0,0,0"])
+    assert result.exit_code == 1 and "at least 4" in result.output
+    result = CliRunner().invoke(main, ["solve", str(path), "--pose", "0,0"])
+    assert result.exit_code == 2 and "x,y,yaw" in result.output

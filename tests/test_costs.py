@@ -1,0 +1,83 @@
+import math
+
+import numpy as np
+import pytest
+
+from rld import costs
+from rld.types import LaneParams, Pose
+
+CAR = Pose(0.0, 0.0, 0.0)
+
+
+def test_spacing_cost_eq18():
+    np.testing.assert_allclose(costs.spacing_cost([3.5, 5.5, 1.5, 7.5], 3.5, 2.0), [0, 1, 1, 16])
+
+
+def test_angle_cost_eq20():
+    # theta_e = pi: a straight continuation costs 0; a turn of theta_t costs 1, either way.
+    np.testing.assert_allclose(
+        costs.angle_cost([0.0, 1.0, -1.0, 2.0], 1.0), [0.0, 1.0, 1.0, 16.0]
+    )
+    assert costs.angle_cost([math.pi / 2], math.pi / 2)[0] == pytest.approx(1.0)
+
+
+def test_heading_cost_eq25():
+    pts = np.array(
+        [
+            [0, 2], [4, 2],  # parallel to the heading: |v x h| = 0
+            [2, -1], [2, 1],  # across, midpoint 2 m ahead: (2 / 2)^4 = 1
+            [4, -1], [4, 1],  # across, 4 m ahead: (2 / 4)^4 = 1/16
+            [0.1, -0.5], [0.1, 0.5],  # under the car: d_car floored at 1 m -> 1^4
+        ],
+        float,
+    )
+    edges = np.arange(8).reshape(4, 2)
+    np.testing.assert_allclose(costs.heading_cost(pts, edges, CAR, 1.0), [0, 1, 1 / 16, 1])
+    # An edge and its reverse cost the same.
+    np.testing.assert_allclose(
+        costs.heading_cost(pts, edges[:, ::-1], CAR, 1.0),
+        costs.heading_cost(pts, edges, CAR, 1.0),
+    )
+
+
+def test_high_cost_masks_eq27_28():
+    assert costs.high_cost_mask([0.5, 4.0, 4.1], 4.0).tolist() == [False, False, True]
+    p = LaneParams()
+    # t_crit is the angle cost at the turn limit, so eq. 28 and C_seg agree.
+    at_limit = costs.angle_cost([p.max_turn_angle_rad], p.angle_tolerance_rad)[0]
+    assert at_limit == pytest.approx(p.max_angle_cost)
+    assert not costs.high_cost_mask([at_limit], p.max_angle_cost)[0]
+    assert costs.high_cost_mask([at_limit * 1.001], p.max_angle_cost)[0]
+
+
+def test_lane_cost_hand_worked():
+    p = LaneParams()  # d_e 3.5, d_t 2, theta_t 1, all weights 1, benefit 2.5
+    # Straight boundaries along the heading, cones 3.5 m apart: only the benefit counts.
+    pts = np.array([[0, 2], [3.5, 2], [7, 2], [0, -2], [3.5, -2], [7, -2]], float)
+    assert costs.lane_cost(pts, [0, 1, 2], [3, 4, 5], CAR, p) == pytest.approx(-4 * 2.5)
+    # Spacing 5.5 m costs 1 per edge; a 1 rad bend at the middle cone costs 1.
+    pts2 = pts.copy()
+    pts2[[1, 4], 0] = 5.5
+    pts2[[2, 5], 0] = 11.0
+    assert costs.lane_cost(pts2, [0, 1, 2], [3, 4, 5], CAR, p) == pytest.approx(4 * (1 - 2.5))
+    bend = np.array([[0, 2], [3.5, 2], [3.5 + 3.5 * math.cos(1), 2 + 3.5 * math.sin(1)]])
+    v = bend[2] - bend[1]
+    mid = (bend[1] + bend[2]) / 2
+    heading = (abs(v[1]) / math.hypot(*mid)) ** 4  # |v x h| with h = (1, 0)
+    expect = 2 * (0 - 2.5) + heading + 1.0
+    got = costs.lane_cost(np.vstack([bend, pts[3:]]), [0, 1, 2], [], CAR, p)
+    assert got == pytest.approx(expect)
+
+
+def test_edge_objective_matches_lane_cost():
+    rng = np.random.default_rng(3)
+    pts = np.cumsum(rng.uniform(1, 4, size=(5, 2)), axis=0)
+    p = LaneParams()
+    edges = np.array([[0, 1], [1, 2], [2, 3], [3, 4]])
+    from rld.constraints import angle_triples
+
+    _, turns = angle_triples(pts, edges)
+    expect = costs.edge_objective(pts, edges, CAR, p).sum() + costs.angle_cost(
+        turns, p.angle_tolerance_rad
+    ).sum()
+    assert costs.lane_cost(pts, [0, 1, 2, 3, 4], [], CAR, p) == pytest.approx(expect)
