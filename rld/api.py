@@ -2,7 +2,7 @@
 
 Input is validated here, once; the methods behind receive clean arrays. A method is looked up
 by name in ``METHODS``; a name that does not exist is a ``ValueError``, never a stand-in lane.
-The RLD program and the CLC search register here when they land (issues 3 and 4).
+The CLC search registers here when it lands (issue 4).
 """
 
 from __future__ import annotations
@@ -18,12 +18,39 @@ from rld.types import Lane, LaneParams, Pose, as_cones, as_pose
 
 __all__ = ["solve_lane", "LaneSolver", "METHODS", "DEFAULT_METHOD", "COLOR_CODES"]
 
-#: method name -> function(points, pose, params) -> Lane
-METHODS: dict[str, Callable[[np.ndarray, Pose, LaneParams], Lane]] = {
-    "nearest": nearest_chain,
+class _NearestMethod:
+    """The nearest-neighbour chain baseline (stateless)."""
+
+    backends: tuple[str, ...] = ()
+
+    def __init__(self, params: LaneParams, backend: str | None = None) -> None:
+        self.params = params
+
+    def solve(self, points, pose, colors=None, time_limit_s=None) -> Lane:
+        return nearest_chain(points, pose, self.params)
+
+
+class _RldMethod:
+    """RLD (Brandes et al. 2020) with a reusable model and warm starts."""
+
+    backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy")
+
+    def __init__(self, params: LaneParams, backend: str | None = None) -> None:
+        from rld.solver import RldModel
+
+        self.model = RldModel(params, backend=backend)
+
+    def solve(self, points, pose, colors=None, time_limit_s=None) -> Lane:
+        return self.model.solve(points, pose, time_limit_s=time_limit_s)
+
+
+#: method name -> class(params, backend) with .solve(points, pose, colors, time_limit_s) -> Lane
+METHODS: dict[str, Callable[..., Any]] = {
+    "rld": _RldMethod,
+    "nearest": _NearestMethod,
 }
 #: The method ``solve_lane`` uses when none is named.
-DEFAULT_METHOD = "nearest"
+DEFAULT_METHOD = "rld"
 #: Per-cone colour labels accepted in ``colors``.
 COLOR_CODES = {"unknown": 0, "left": 1, "right": 2}
 
@@ -32,7 +59,7 @@ def _check_method(method: str) -> str:
     if method not in METHODS:
         raise ValueError(
             f"unknown method {method!r}; available: {', '.join(sorted(METHODS))}"
-            " (rld and clc are not implemented yet)"
+            " (clc is not implemented yet)"
         )
     return method
 
@@ -70,9 +97,11 @@ class LaneSolver:
         self.params = params if params is not None else LaneParams()
         if not isinstance(self.params, LaneParams):
             raise ValueError("params must be a LaneParams")
-        if backend is not None:
+        kind = METHODS[self.method]
+        if backend is not None and not kind.backends:
             raise ValueError(f"method {method!r} has no solver backends (got {backend!r})")
         self.backend = backend
+        self._impl = kind(self.params, backend=backend)
         self.previous: Lane | None = None
 
     def solve(
@@ -91,14 +120,10 @@ class LaneSolver:
         if time_limit_s is not None and not (time_limit_s > 0):
             raise ValueError(f"time_limit_s must be positive, got {time_limit_s}")
         t0 = time.perf_counter()
-        lane = METHODS[self.method](points, car, self.params)
+        lane = self._impl.solve(points, car, colors=colors, time_limit_s=time_limit_s)
         elapsed = time.perf_counter() - t0
-        lane.stats.update(
-            method=self.method,
-            backend=self.backend,
-            solve_time_s=elapsed,
-            n_cones=int(points.shape[0]),
-        )
+        lane.stats.setdefault("backend", self.backend)
+        lane.stats.update(method=self.method, solve_time_s=elapsed, n_cones=int(points.shape[0]))
         lane.stats.setdefault("n_cones_used", int(points.shape[0]))
         self.previous = lane
         return lane

@@ -1,0 +1,73 @@
+"""HiGHS backend through highspy: the program passed as one HighsLp with integrality, the warm
+start as a MIP start (``setSolution``)."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from rld.backends.base import Backend, BackendResult
+from rld.program import LaneProgram
+
+
+class HighsBackend(Backend):
+    name = "highs"
+
+    def __init__(self, threads: int = 1) -> None:
+        import highspy  # noqa: F401
+
+        self.threads = int(threads)
+
+    def solve(self, program: LaneProgram, time_limit_s: float, hint=None) -> BackendResult:
+        import highspy
+
+        t0 = time.perf_counter()
+        inf = highspy.kHighsInf
+        h = highspy.Highs()
+        h.silent()
+        h.setOptionValue("time_limit", max(float(time_limit_s), 1e-3))
+        h.setOptionValue("threads", self.threads)
+        h.setOptionValue("mip_rel_gap", 0.0)
+        h.setOptionValue("mip_abs_gap", 1e-7)
+        lp = highspy.HighsLp()
+        n, m = program.n_cols, program.n_rows
+        lp.num_col_ = n
+        lp.num_row_ = m
+        lp.col_cost_ = program.c.astype(np.float64)
+        lp.col_lower_ = program.col_lo.astype(np.float64)
+        lp.col_upper_ = program.col_hi.astype(np.float64)
+        lp.row_lower_ = np.where(np.isfinite(program.row_lo), program.row_lo, -inf)
+        lp.row_upper_ = np.where(np.isfinite(program.row_hi), program.row_hi, inf)
+        csc = program.A.tocsc()
+        csc.sort_indices()
+        lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+        lp.a_matrix_.start_ = csc.indptr.astype(np.int32)
+        lp.a_matrix_.index_ = csc.indices.astype(np.int32)
+        lp.a_matrix_.value_ = csc.data.astype(np.float64)
+        lp.a_matrix_.num_col_ = n
+        lp.a_matrix_.num_row_ = m
+        lp.integrality_ = [highspy.HighsVarType.kInteger] * n
+        h.passModel(lp)
+        if hint is not None:
+            sol = highspy.HighsSolution()
+            sol.col_value = [float(v) for v in hint]
+            sol.value_valid = True
+            h.setSolution(sol)
+        h.run()
+        elapsed = time.perf_counter() - t0
+        status = h.getModelStatus()
+        info = h.getInfo()
+        S = highspy.HighsModelStatus
+        has_sol = info.primal_solution_status == highspy.SolutionStatus.kSolutionStatusFeasible
+        x = np.round(np.array(h.getSolution().col_value)) if has_sol else None
+        bound = float(info.mip_dual_bound)
+        if status == S.kOptimal and x is not None:
+            return BackendResult("optimal", x, float(program.c @ x), bound, elapsed)
+        if status == S.kInfeasible:
+            return BackendResult("infeasible", None, time_s=elapsed)
+        if x is not None:
+            return BackendResult("feasible", x, float(program.c @ x), bound, elapsed)
+        if status in (S.kTimeLimit, S.kInterrupt, S.kIterationLimit, S.kSolutionLimit):
+            return BackendResult("timeout", None, time_s=elapsed)
+        return BackendResult("error", None, time_s=elapsed, message=h.modelStatusToString(status))

@@ -1,0 +1,373 @@
+"""The RLD binary integer program (Brandes et al. 2020, section II) as solver-neutral arrays.
+
+``build_program`` turns cones and a pose into a ``LaneProgram``: an objective vector, a sparse
+constraint matrix with row bounds, and 0/1 column bounds, every column binary. Backends
+(``rld.backends``) only load these arrays, solve, and hand back a 0/1 vector; ``extract_paths``
+turns that into two boundaries.
+
+Columns, in this order (each block may be empty):
+
+- ``a`` (E): edge variables a_ij for the candidate edges (eqs 1-9, 29);
+- ``f`` (T): angle variables f_ijk for pairs of candidate edges meeting at a cone (eq. 21);
+- ``g`` (N): inlier-cone variables (eqs 1-2);
+- ``m`` (N): endpoint variables, the paper's m_i = 2 g_i - A_i (eq. 10), kept as columns so
+  the endpoint constraints are short rows.
+
+Every family of rows comes from the shared constraint and cost modules; docs/formulation.md maps
+each row family to its equation and states where we deviate. In short: eq. 7 is read with ``<``;
+eq. 9 as ``h^T a >= 2`` (eq. 33); eq. 4 is implied by eq. 3 and left out; eqs 12-17 (the far
+endpoints at most d_max apart) become pairwise rows m_i + m_j <= 1; eqs 27-28 and the spacing
+limit are applied by not creating the variables ("exact pruning"), with a row a_ij + a_jk <= 1
+wherever a pruned angle variable would have had to be 0; eq. 5 is added lazily, for the cycles
+a solution actually contains.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from rld import constraints as cons
+from rld import costs
+from rld.types import LaneParams, Pose
+
+__all__ = ["LaneProgram", "build_program", "cycle_cut", "extract_paths", "ROW_FAMILIES"]
+
+ROW_FAMILIES = (
+    "inlier_lower",  # eq. 1: g_i - A_i <= 0
+    "inlier_upper",  # eq. 2: A_i - 2 g_i <= 0 (degree <= 2)
+    "endpoint_def",  # eq. 10: m_i - 2 g_i + A_i = 0
+    "four_endpoints",  # eq. 3: sum m_i = 4
+    "near_endpoints",  # eq. 11: sum r_i m_i = 2
+    "far_endpoints",  # eqs 12-17: m_i + m_j <= 1 for far cones more than d_max apart
+    "heading",  # eq. 9 / 33: h^T a >= 2
+    "width_conflict",  # eqs 6-8: a_e + a_f <= 1
+    "crossing",  # section V: a_e + a_f <= 1 for crossing edges
+    "turn_limit",  # eq. 28 on pruned f: a_ij + a_jk <= 1
+    "angle_link",  # eqs 22-23: 2 f - a_ij - a_jk <= 0 and f - a_ij - a_jk >= -1
+    "cycle_cut",  # eq. 5, lazily
+    "fixed_start",  # optional: the near endpoints are given (cross-check with CLC)
+)
+
+
+@dataclass(eq=False)
+class LaneProgram:
+    """One instance of the RLD program over ``points`` (the cones it was built from).
+
+    ``c`` is the objective (minimised); ``A`` (rows x columns, CSR) with ``row_lo <= A x <=
+    row_hi``; columns are binary with bounds ``col_lo``, ``col_hi``. ``family`` names each row's
+    family (see ``ROW_FAMILIES``). ``edges``, ``triples``, ``turns`` describe the ``a`` and ``f``
+    columns; ``near`` is the mask r of eq. 11.
+    """
+
+    points: np.ndarray
+    pose: Pose
+    params: LaneParams
+    edges: np.ndarray
+    triples: np.ndarray
+    turns: np.ndarray
+    near: np.ndarray
+    c: np.ndarray
+    A: sp.csr_matrix
+    row_lo: np.ndarray
+    row_hi: np.ndarray
+    col_lo: np.ndarray
+    col_hi: np.ndarray
+    family: np.ndarray
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def n_edges(self) -> int:
+        return int(self.edges.shape[0])
+
+    @property
+    def n_cones(self) -> int:
+        return int(self.points.shape[0])
+
+    @property
+    def n_cols(self) -> int:
+        return int(self.c.shape[0])
+
+    @property
+    def n_rows(self) -> int:
+        return int(self.A.shape[0])
+
+    def block(self, name: str) -> slice:
+        """The column slice of block ``a``, ``f``, ``g`` or ``m``."""
+        E, T, N = self.n_edges, int(self.triples.shape[0]), self.n_cones
+        starts = {"a": 0, "f": E, "g": E + T, "m": E + T + N}
+        sizes = {"a": E, "f": T, "g": N, "m": N}
+        return slice(starts[name], starts[name] + sizes[name])
+
+    def objective(self, x: np.ndarray) -> float:
+        return float(self.c @ x)
+
+    def is_feasible(self, x: np.ndarray, tol: float = 1e-6) -> bool:
+        """Whether the 0/1 vector ``x`` satisfies every row and column bound."""
+        ax = self.A @ x
+        return bool(
+            np.all(ax >= self.row_lo - tol)
+            and np.all(ax <= self.row_hi + tol)
+            and np.all(x >= self.col_lo - tol)
+            and np.all(x <= self.col_hi + tol)
+        )
+
+    def add_rows(self, A: sp.spmatrix, lo: np.ndarray, hi: np.ndarray, family: str) -> None:
+        """Append rows (used for the lazy cycle cuts)."""
+        self.A = sp.vstack([self.A, sp.csr_matrix(A)], format="csr")
+        self.row_lo = np.concatenate([self.row_lo, lo])
+        self.row_hi = np.concatenate([self.row_hi, hi])
+        self.family = np.concatenate([self.family, np.full(len(lo), family, dtype=object)])
+
+    def solution_from_edges(self, chosen: np.ndarray) -> np.ndarray:
+        """The full 0/1 column vector implied by a set of chosen edge indices (for hints and
+        tests): a, then f, g and m derived from them."""
+        x = np.zeros(self.n_cols)
+        a = np.zeros(self.n_edges)
+        a[np.asarray(chosen, dtype=np.int64)] = 1.0
+        x[self.block("a")] = a
+        if self.triples.shape[0]:
+            x[self.block("f")] = a[self.triples[:, 3]] * a[self.triples[:, 4]]
+        deg = np.bincount(self.edges[a > 0].ravel(), minlength=self.n_cones)
+        x[self.block("g")] = deg > 0
+        x[self.block("m")] = deg == 1
+        return x
+
+
+class _Rows:
+    """Accumulates sparse rows as COO triplets."""
+
+    def __init__(self) -> None:
+        self.r: list[np.ndarray] = []
+        self.c: list[np.ndarray] = []
+        self.v: list[np.ndarray] = []
+        self.lo: list[np.ndarray] = []
+        self.hi: list[np.ndarray] = []
+        self.fam: list[np.ndarray] = []
+        self.n = 0
+
+    def add(self, rows, cols, vals, lo, hi, family: str) -> None:
+        """``rows`` are local row numbers 0..k-1 of this batch."""
+        lo = np.atleast_1d(np.asarray(lo, dtype=np.float64))
+        hi = np.atleast_1d(np.asarray(hi, dtype=np.float64))
+        k = max(lo.size, hi.size)
+        if k == 0:
+            return
+        self.r.append(np.asarray(rows, dtype=np.int64) + self.n)
+        self.c.append(np.asarray(cols, dtype=np.int64))
+        self.v.append(np.asarray(vals, dtype=np.float64))
+        self.lo.append(np.broadcast_to(lo, (k,)).copy())
+        self.hi.append(np.broadcast_to(hi, (k,)).copy())
+        self.fam.append(np.full(k, family, dtype=object))
+        self.n += k
+
+    def add_pairs(self, cols_a, cols_b, hi: float, family: str) -> None:
+        """Rows x_a + x_b <= hi."""
+        k = len(cols_a)
+        if k == 0:
+            return
+        rows = np.repeat(np.arange(k), 2)
+        cols = np.column_stack([cols_a, cols_b]).ravel()
+        self.add(rows, cols, np.ones(2 * k), -np.inf, np.full(k, hi), family)
+
+    def build(self, n_cols: int):
+        if self.n == 0:
+            return (sp.csr_matrix((0, n_cols)), np.zeros(0), np.zeros(0),
+                    np.zeros(0, dtype=object))
+        A = sp.csr_matrix(
+            (np.concatenate(self.v), (np.concatenate(self.r), np.concatenate(self.c))),
+            shape=(self.n, n_cols),
+        )
+        A.sum_duplicates()
+        return A, np.concatenate(self.lo), np.concatenate(self.hi), np.concatenate(self.fam)
+
+
+def build_program(
+    points: np.ndarray,
+    pose: Pose,
+    params: LaneParams,
+    *,
+    no_crossing: bool = True,
+    start: tuple[int, int] | None = None,
+    prune: bool = True,
+) -> LaneProgram:
+    """Build the RLD program over ``points`` (N, 2) for the car at ``pose``.
+
+    ``no_crossing`` adds the pairwise no-crossing rows (the paper's section V extension).
+    ``start`` fixes the two near endpoints (cone indices), as CLC's starting vertices.
+    ``prune=False`` builds the paper's dense model instead (all cone pairs as edge variables,
+    all edge pairs at a cone as angle variables, the spacing limit and eqs 27-28 as rows); it
+    exists to test that pruning is exact.
+    """
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    N = points.shape[0]
+    p = params
+    if prune:
+        edges = cons.candidate_edges(points, p.max_cone_spacing_m)
+    else:
+        ii, jj = np.triu_indices(N, k=1)
+        edges = np.column_stack([ii, jj]).astype(np.int64)
+    lengths = cons.edge_lengths(points, edges)
+    s_cost = costs.spacing_cost(lengths, p.expected_spacing_m, p.spacing_tolerance_m)
+    edge_bad = (lengths > p.max_cone_spacing_m) | costs.high_cost_mask(s_cost, p.max_spacing_cost)
+    if prune:
+        edges, lengths, s_cost = edges[~edge_bad], lengths[~edge_bad], s_cost[~edge_bad]
+        edge_bad = edge_bad[~edge_bad]
+    E = edges.shape[0]
+    all_triples, all_turns = cons.angle_triples(points, edges)
+    t_cost = costs.angle_cost(all_turns, p.angle_tolerance_rad)
+    turn_bad = ~cons.turn_within_limit(all_turns, p.max_turn_angle_rad) | costs.high_cost_mask(
+        t_cost, p.max_angle_cost
+    )
+    if prune:
+        keep = ~turn_bad
+        triples, turns, t_cost_kept = all_triples[keep], all_turns[keep], t_cost[keep]
+        forbidden_pairs = all_triples[turn_bad]
+    else:
+        triples, turns, t_cost_kept = all_triples, all_turns, t_cost
+        forbidden_pairs = all_triples[:0]
+    T = triples.shape[0]
+    a0, f0, g0, m0 = 0, E, E + T, E + T + N
+    n_cols = E + T + 2 * N
+
+    c = np.zeros(n_cols)
+    c[a0:f0] = costs.edge_objective(points, edges, pose, p)
+    c[f0:g0] = p.w_angle * t_cost_kept
+
+    near = cons.near_car_mask(points, pose, p.near_radius_m)
+    if start is not None:
+        near = np.zeros(N, dtype=bool)
+        near[list(start)] = True
+
+    rows = _Rows()
+    # Incidence of edges on cones: A_i = sum of a_e over e containing i.
+    inc_r = edges.ravel()  # cone of each (edge, end)
+    inc_c = np.repeat(np.arange(E), 2) + a0
+    # eq. 1: g_i - A_i <= 0
+    rows.add(np.concatenate([np.arange(N), inc_r]), np.concatenate([g0 + np.arange(N), inc_c]),
+             np.concatenate([np.ones(N), -np.ones(2 * E)]), -np.inf, np.zeros(N), "inlier_lower")
+    # eq. 2 (times 2): A_i - 2 g_i <= 0
+    rows.add(np.concatenate([np.arange(N), inc_r]), np.concatenate([g0 + np.arange(N), inc_c]),
+             np.concatenate([-2 * np.ones(N), np.ones(2 * E)]), -np.inf, np.zeros(N),
+             "inlier_upper")
+    # eq. 10: m_i - 2 g_i + A_i = 0
+    rows.add(np.concatenate([np.arange(N), np.arange(N), inc_r]),
+             np.concatenate([m0 + np.arange(N), g0 + np.arange(N), inc_c]),
+             np.concatenate([np.ones(N), -2 * np.ones(N), np.ones(2 * E)]),
+             np.zeros(N), np.zeros(N), "endpoint_def")
+    # eq. 3: sum_i (A_i - 2 g_i) = -4, i.e. sum_i m_i = 4 (eq. 4 is the same sum as an
+    # inequality and is implied).
+    rows.add(np.zeros(N), m0 + np.arange(N), np.ones(N), 4.0, 4.0, "four_endpoints")
+    # eq. 11: r^T m = 2
+    nz = np.flatnonzero(near)
+    rows.add(np.zeros(nz.size), m0 + nz, np.ones(nz.size), 2.0, 2.0, "near_endpoints")
+    if start is not None:
+        rows.add(np.arange(2), m0 + np.array(start), np.ones(2), 1.0, 1.0, "fixed_start")
+    # eqs 12-17: the two far endpoints are at most far_endpoint_max_m apart.
+    far = np.flatnonzero(~near)
+    if far.size >= 2:
+        fi, fj = np.triu_indices(far.size, k=1)
+        fi, fj = far[fi], far[fj]
+        apart = np.hypot(*(points[fi] - points[fj]).T) > p.far_endpoint_max_m
+        rows.add_pairs(m0 + fi[apart], m0 + fj[apart], 1.0, "far_endpoints")
+    # eq. 9 / 33: at least two edges near the car along the heading.
+    h = np.flatnonzero(cons.heading_mask(points, edges, pose, p.heading_radius_m,
+                                         p.heading_tolerance_rad))
+    rows.add(np.zeros(h.size), a0 + h, np.ones(h.size), 2.0, np.inf, "heading")
+    # eqs 6-8: minimum width.
+    wc = cons.width_conflicts(points, edges, p.min_width_m)
+    rows.add_pairs(a0 + wc[:, 0], a0 + wc[:, 1], 1.0, "width_conflict")
+    if no_crossing:
+        cr = cons.crossing_edge_pairs(points, edges)
+        rows.add_pairs(a0 + cr[:, 0], a0 + cr[:, 1], 1.0, "crossing")
+    # eq. 28 on pruned angle variables: the two edges cannot both be chosen.
+    rows.add_pairs(a0 + forbidden_pairs[:, 3], a0 + forbidden_pairs[:, 4], 1.0, "turn_limit")
+    # eqs 22-23: f = a_ij * a_jk.
+    if T:
+        k = np.arange(T)
+        r3 = np.repeat(k, 3)
+        cols = np.column_stack([f0 + k, a0 + triples[:, 3], a0 + triples[:, 4]]).ravel()
+        rows.add(r3, cols, np.tile([2.0, -1.0, -1.0], T), -np.inf, np.zeros(T), "angle_link")
+        rows.add(r3, cols, np.tile([1.0, -1.0, -1.0], T), -np.ones(T), np.inf, "angle_link")
+    A, lo, hi, fam = rows.build(n_cols)
+    col_lo = np.zeros(n_cols)
+    col_hi = np.ones(n_cols)
+    if not prune:
+        # The dense model states the spacing limit, eq. 27 and eq. 28 as constraints.
+        col_hi[a0:f0][edge_bad] = 0.0
+        col_hi[f0:g0][turn_bad] = 0.0
+    return LaneProgram(
+        points=points, pose=pose, params=p, edges=edges, triples=triples, turns=turns,
+        near=near, c=c, A=A, row_lo=lo, row_hi=hi, col_lo=col_lo, col_hi=col_hi, family=fam,
+        stats={"n_cols": n_cols, "n_rows": int(A.shape[0]), "n_edges": E, "n_angles": T},
+    )
+
+
+def _components(n: int, edges: np.ndarray) -> list[list[int]]:
+    """Connected components (lists of cones) of the graph of ``edges`` with at least one edge."""
+    adj: list[list[int]] = [[] for _ in range(n)]
+    for i, j in edges:
+        adj[i].append(int(j))
+        adj[j].append(int(i))
+    seen = np.zeros(n, dtype=bool)
+    comps = []
+    for s in range(n):
+        if seen[s] or not adj[s]:
+            continue
+        stack, comp = [s], []
+        seen[s] = True
+        while stack:
+            v = stack.pop()
+            comp.append(v)
+            for w in adj[v]:
+                if not seen[w]:
+                    seen[w] = True
+                    stack.append(w)
+        comps.append(sorted(comp))
+    return comps
+
+
+def cycle_cut(program: LaneProgram, cones: list[int]) -> None:
+    """Add RLD eq. 5 for the cone set ``cones``: at most |S| - 1 edges inside S."""
+    S = np.zeros(program.n_cones, dtype=bool)
+    S[cones] = True
+    inside = np.flatnonzero(S[program.edges[:, 0]] & S[program.edges[:, 1]])
+    A = sp.csr_matrix(
+        (np.ones(inside.size), (np.zeros(inside.size, dtype=np.int64), inside)),
+        shape=(1, program.n_cols),
+    )
+    program.add_rows(A, np.array([-np.inf]), np.array([len(cones) - 1.0]), "cycle_cut")
+
+
+def extract_paths(
+    program: LaneProgram, x: np.ndarray
+) -> tuple[list[list[int]], list[list[int]]]:
+    """Split a solution into its simple paths and its cycles (lists of cones).
+
+    Each path is ordered from its end nearer the car (an end in the near mask first).
+    """
+    chosen = program.edges[x[program.block("a")] > 0.5]
+    n = program.n_cones
+    deg = np.bincount(chosen.ravel(), minlength=n)
+    adj: list[list[int]] = [[] for _ in range(n)]
+    for i, j in chosen:
+        adj[i].append(int(j))
+        adj[j].append(int(i))
+    paths, cycles = [], []
+    for comp in _components(n, chosen):
+        ends = [v for v in comp if deg[v] == 1]
+        if len(ends) != 2 or any(deg[v] > 2 for v in comp):
+            cycles.append(comp)
+            continue
+        d = np.hypot(*(program.points[ends] - program.pose.xy).T)
+        key = [(not program.near[v], d[k], v) for k, v in enumerate(ends)]
+        first = min(key)[2]
+        path, prev = [first], -1
+        while len(path) < len(comp):
+            nxt = [w for w in adj[path[-1]] if w != prev]
+            prev = path[-1]
+            path.append(nxt[0])
+        paths.append(path)
+    return paths, cycles

@@ -1,0 +1,186 @@
+"""The reusable RLD model: cone window, program, backend, lazy cycle cuts, warm start.
+
+``RldModel.solve(points, pose)`` takes the ``max_cones`` map cones nearest ahead of the car,
+builds the program of ``rld.program`` over them, solves it with the chosen backend under the time
+budget, adds cycle-elimination cuts (RLD eq. 5) for any cycle in the solution and re-solves until
+the chosen edges are exactly two simple paths, and returns a ``Lane`` in the caller's indices.
+
+Warm start: the previous lane's boundaries are kept as positions; on the next call every
+previous cone is matched to the nearest new window cone within 0.5 m (SLAM maps keep their cones)
+and the previous edges that survive become the backend's hint (a CP-SAT hint, a HiGHS MIP start).
+
+Window rule: cones not more than ``near_radius_m`` behind the car (measured along its heading,
+so the cones beside it stay in), sorted by distance to the car, the first ``max_cones``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from rld.backends import make_backend
+from rld.constraints import near_car_mask
+from rld.program import build_program, cycle_cut, extract_paths
+from rld.types import Lane, LaneParams, LaneStatus, Pose
+
+__all__ = ["RldModel", "cone_window", "MATCH_TOLERANCE_M", "DEFAULT_TIME_LIMIT_S"]
+
+MATCH_TOLERANCE_M = 0.5
+DEFAULT_TIME_LIMIT_S = 0.4  # the paper's success limit (section IV-A)
+MAX_CYCLE_ROUNDS = 25
+
+
+def cone_window(points: np.ndarray, pose: Pose, params: LaneParams) -> tuple[np.ndarray, float]:
+    """Indices of the cones RLD takes (see the module docstring) and the horizon: the distance
+    from the car to the farthest of them, metres."""
+    d = points - pose.xy
+    along = d @ pose.heading
+    dist = np.hypot(d[:, 0], d[:, 1])
+    ok = np.flatnonzero(along >= -params.near_radius_m)
+    # Ties in distance go by position, so the window does not depend on the input order.
+    key = np.round(dist[ok], 9)
+    order = ok[np.lexsort((points[ok, 1], points[ok, 0], key))][: int(params.max_cones)]
+    horizon = float(dist[order].max()) if order.size else 0.0
+    return np.sort(order), horizon
+
+
+class RldModel:
+    """RLD with a backend (``cpsat``, ``highs``, ``cvxpy`` or ``cvxpy:SOLVER``) and the previous
+    solution for warm starts. ``no_crossing`` adds the no-crossing rows (section V)."""
+
+    def __init__(
+        self,
+        params: LaneParams,
+        backend: str | None = None,
+        warm_start: bool = True,
+        no_crossing: bool = True,
+    ) -> None:
+        self.params = params
+        self.backend = make_backend(backend)
+        self.warm_start = warm_start
+        self.no_crossing = no_crossing
+        self._previous: list[np.ndarray] | None = None  # boundary positions of the last lane
+
+    def reset(self) -> None:
+        self._previous = None
+
+    def _hint(self, program) -> tuple[np.ndarray | None, int]:
+        if not self.warm_start or self._previous is None:
+            return None, 0
+        tree = cKDTree(program.points)
+        eid = {(int(i), int(j)): k for k, (i, j) in enumerate(program.edges)}
+        chosen = []
+        for xy in self._previous:
+            if len(xy) < 2:
+                continue
+            dist, idx = tree.query(xy, distance_upper_bound=MATCH_TOLERANCE_M)
+            for k in range(len(xy) - 1):
+                if np.isfinite(dist[k]) and np.isfinite(dist[k + 1]):
+                    key = (min(idx[k], idx[k + 1]), max(idx[k], idx[k + 1]))
+                    if key in eid:
+                        chosen.append(eid[key])
+        if not chosen:
+            return None, 0
+        return program.solution_from_edges(np.array(chosen)), len(chosen)
+
+    def solve(
+        self,
+        points: np.ndarray,
+        pose: Pose,
+        time_limit_s: float | None = None,
+        start: tuple[int, int] | None = None,
+    ) -> Lane:
+        """Solve on validated ``points``. ``start`` (indices into ``points``) fixes the two near
+        endpoints, for the cross-check with CLC's starting vertices."""
+        budget = DEFAULT_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
+        t0 = time.perf_counter()
+        if start is None and near_car_mask(points, pose, self.params.near_radius_m).sum() < 2:
+            return Lane.not_found(
+                points,
+                f"fewer than two cones within near_radius_m = {self.params.near_radius_m} m of "
+                "the car",
+                stats={"backend": self.backend.name},
+            )
+        window, horizon = cone_window(points, pose, self.params)
+        if start is not None:
+            window = np.union1d(window, np.asarray(start))
+        local_start = None
+        if start is not None:
+            local_start = (int(np.searchsorted(window, start[0])),
+                           int(np.searchsorted(window, start[1])))
+        sub = points[window]
+        stats = {"n_cones_used": int(window.size), "horizon_m": horizon, "cycle_rounds": 0,
+                 "backend": self.backend.name}
+        if window.size < 4:
+            return Lane.not_found(points, f"only {window.size} cones ahead of the car", stats=stats)
+        program = build_program(sub, pose, self.params, no_crossing=self.no_crossing,
+                                start=local_start)
+        stats.update(program.stats)
+        stats["build_time_s"] = time.perf_counter() - t0
+        if program.near.sum() < 2:
+            return Lane.not_found(
+                points,
+                f"fewer than two cones within near_radius_m = {self.params.near_radius_m} m",
+                stats=stats,
+            )
+        hint, n_hinted = self._hint(program)
+        stats["warm_start_edges"] = n_hinted
+        result = None
+        t_solve = time.perf_counter()  # the budget bounds the solves, not the model update
+        while True:
+            remaining = budget - (time.perf_counter() - t_solve)
+            if remaining <= 0 and result is not None:
+                break
+            result = self.backend.solve(program, max(remaining, 1e-3), hint)
+            if result.x is None:
+                break
+            paths, cycles = extract_paths(program, result.x)
+            if not cycles:
+                break
+            stats["cycle_rounds"] += 1
+            if stats["cycle_rounds"] > MAX_CYCLE_ROUNDS:
+                break
+            for comp in cycles:
+                cycle_cut(program, comp)
+        stats["solve_time_s"] = time.perf_counter() - t_solve
+        stats["objective"] = result.objective
+        stats["bound"] = result.bound
+        if result.x is None:
+            status = {"infeasible": LaneStatus.INFEASIBLE, "timeout": LaneStatus.TIMEOUT}.get(
+                result.status, LaneStatus.NOT_FOUND)
+            msg = {
+                "infeasible": "the program has no solution: no lane satisfies the constraints",
+                "timeout": f"no solution within the time limit of {budget:.3g} s",
+            }.get(result.status, f"solver error: {result.message}")
+            return Lane.not_found(points, msg, status=status, stats=stats)
+        paths, cycles = extract_paths(program, result.x)
+        status = LaneStatus.OPTIMAL if result.status == "optimal" else LaneStatus.FEASIBLE
+        message = ""
+        if cycles:
+            # Out of time with a cycle left: the two paths without it still form a lane graph
+            # that meets every constraint, but it is no longer proven optimal.
+            status, message = LaneStatus.FEASIBLE, "cycle dropped when the time budget ran out"
+        if result.status == "feasible":
+            message = message or f"time limit reached; gap {result.gap:.4g}"
+        stats["gap"] = result.gap
+        if len(paths) != 2:
+            return Lane.not_found(points, f"solution has {len(paths)} paths", stats=stats)
+        # Left is the path whose first cone lies further to the car's left.
+        y0 = [pose.to_local(sub[[p[0]]])[0, 1] for p in paths]
+        left, right = (paths[0], paths[1]) if y0[0] >= y0[1] else (paths[1], paths[0])
+        self._previous = [sub[left], sub[right]]
+        eid = {(int(i), int(j)): k for k, (i, j) in enumerate(program.edges)}
+        used = [eid[(min(a, b), max(a, b))] for p in (left, right)
+                for a, b in zip(p[:-1], p[1:], strict=True)]
+        lane_cost = program.objective(program.solution_from_edges(np.array(used, dtype=int)))
+        return Lane(
+            cones=points,
+            left=window[left],
+            right=window[right],
+            status=status,
+            message=message,
+            cost=lane_cost,
+            stats=stats,
+        )
