@@ -190,7 +190,9 @@ def turn_angle(ax, ay, bx, by, cx, cy):
     vy = cy - by
     if (ux == 0.0 and uy == 0.0) or (vx == 0.0 and vy == 0.0):
         return math.pi
-    return math.atan2(cross2(ux, uy, vx, vy), ux * vx + uy * vy)
+    t = math.atan2(cross2(ux, uy, vx, vy), ux * vx + uy * vy)
+    # An exact reversal can give a cross product of -0.0 and atan2 then -pi: keep (-pi, pi].
+    return math.pi if t <= -math.pi else t
 
 
 # ----------------------------------------------------------------------------------------------
