@@ -116,6 +116,49 @@ def solve(map_path: str, pose_text: str, method: str, plot_path: str | None) -> 
         sys.exit(1)
 
 
+def _benchmark_module(name: str):
+    """Import ``benchmarks.NAME`` from the working directory or from this checkout."""
+    import importlib
+    from pathlib import Path
+
+    for root in (Path.cwd(), Path(__file__).resolve().parents[1]):
+        if (root / "benchmarks" / f"{name}.py").exists():
+            if str(root) not in sys.path:
+                sys.path.insert(0, str(root))
+            return importlib.import_module(f"benchmarks.{name}")
+    raise click.ClickException(
+        "benchmarks/ not found: run `rld bench` from a checkout of the repository"
+    )
+
+
+@main.group()
+def bench() -> None:
+    """Run the benchmarks of benchmarks/ (from a checkout) and print their tables."""
+
+
+@bench.command("rld")
+@click.option("--backends", default="cpsat,highs,cvxpy", show_default=True)
+@click.option("--sizes", default="12,16,20,30,40", show_default=True, help="Cones per window.")
+@click.option("--tracks", "n_tracks", default=4, show_default=True, help="Generated tracks.")
+@click.option("--stride", default=25, show_default=True, help="Every k-th pose of each lap.")
+@click.option("--time-limit", "time_limit_s", default=1.0, show_default=True,
+              help="Budget per call, seconds.")
+@click.option("--out", default=None, help="Also write the Markdown table to this file.")
+def bench_rld(backends: str, sizes: str, n_tracks: int, stride: int, time_limit_s: float,
+              out: str | None) -> None:
+    """RLD latency per backend and window size, cold and warm-started."""
+    mod = _benchmark_module("bench_rld")
+    rows = mod.run(sizes=[int(v) for v in sizes.split(",")],
+                   backends=[b.strip() for b in backends.split(",")],
+                   n_tracks=n_tracks, stride=stride, time_limit_s=time_limit_s)
+    table = mod.to_markdown(rows, time_limit_s)
+    click.echo(f"machine: {mod.machine()}")
+    click.echo(table)
+    if out:
+        with open(out, "w") as fh:
+            fh.write(table + "\n")
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()
 

@@ -49,6 +49,7 @@ ROW_FAMILIES = (
     "angle_link",  # eqs 22-23: 2 f - a_ij - a_jk <= 0 and f - a_ij - a_jk >= -1
     "cycle_cut",  # eq. 5, lazily
     "fixed_start",  # optional: the near endpoints are given (cross-check with CLC)
+    "angle_cover",  # valid equalities tying f to g, m and a (our strengthening)
 )
 
 
@@ -192,6 +193,7 @@ def build_program(
     no_crossing: bool = True,
     start: tuple[int, int] | None = None,
     prune: bool = True,
+    strengthen: bool = True,
 ) -> LaneProgram:
     """Build the RLD program over ``points`` (N, 2) for the car at ``pose``.
 
@@ -199,7 +201,9 @@ def build_program(
     ``start`` fixes the two near endpoints (cone indices), as CLC's starting vertices.
     ``prune=False`` builds the paper's dense model instead (all cone pairs as edge variables,
     all edge pairs at a cone as angle variables, the spacing limit and eqs 27-28 as rows); it
-    exists to test that pruning is exact.
+    exists to test that pruning is exact. ``strengthen`` adds valid equalities that tie the
+    angle variables to the cones (``angle_cover``; they cut no lane graph off, and make the
+    relaxation pay the angle costs).
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
     N = points.shape[0]
@@ -291,6 +295,36 @@ def build_program(
         cols = np.column_stack([f0 + k, a0 + triples[:, 3], a0 + triples[:, 4]]).ravel()
         rows.add(r3, cols, np.tile([2.0, -1.0, -1.0], T), -np.inf, np.zeros(T), "angle_link")
         rows.add(r3, cols, np.tile([1.0, -1.0, -1.0], T), -np.ones(T), np.inf, "angle_link")
+    if T and strengthen:
+        # Valid equalities that tie f to the cones (our addition; the LP relaxation of eqs
+        # 22-23 alone lets f = 0 with both edges at 1/2, so the angle costs vanish from the
+        # bound). An interior cone (g = 1, m = 0) has exactly one chosen pair of edges, an
+        # endpoint or unused cone none: sum_{t at j} f_t = g_j - m_j. A chosen edge e at a
+        # cone j that is not an endpoint is in exactly one chosen pair there, and never in two:
+        # a_e - m_j <= sum_{t at j, e in t} f_t <= a_e.
+        centre = triples[:, 1]
+        rows.add(np.concatenate([centre, np.arange(N), np.arange(N)]),
+                 np.concatenate([f0 + np.arange(T), g0 + np.arange(N), m0 + np.arange(N)]),
+                 np.concatenate([np.ones(T), -np.ones(N), np.ones(N)]),
+                 np.zeros(N), np.zeros(N), "angle_cover")
+        # (cone, edge) incidences and the triples that contain each.
+        inc_edge = np.concatenate([triples[:, 3], triples[:, 4]])
+        inc_cone = np.concatenate([centre, centre])
+        inc_f = np.concatenate([np.arange(T), np.arange(T)])
+        pairs, row_of = np.unique(np.column_stack([inc_cone, inc_edge]), axis=0,
+                                  return_inverse=True)
+        row_of = row_of.ravel()
+        K = pairs.shape[0]
+        kk = np.arange(K)
+        # sum f - a_e <= 0
+        rows.add(np.concatenate([row_of, kk]), np.concatenate([f0 + inc_f, a0 + pairs[:, 1]]),
+                 np.concatenate([np.ones(row_of.size), -np.ones(K)]), -np.inf, np.zeros(K),
+                 "angle_cover")
+        # sum f - a_e + m_j >= 0
+        rows.add(np.concatenate([row_of, kk, kk]),
+                 np.concatenate([f0 + inc_f, a0 + pairs[:, 1], m0 + pairs[:, 0]]),
+                 np.concatenate([np.ones(row_of.size), -np.ones(K), np.ones(K)]),
+                 np.zeros(K), np.inf, "angle_cover")
     A, lo, hi, fam = rows.build(n_cols)
     col_lo = np.zeros(n_cols)
     col_hi = np.ones(n_cols)

@@ -9,7 +9,7 @@ Warm start: the previous lane's boundaries are kept as positions; on the next ca
 previous cone is matched to the nearest new window cone within 0.5 m (SLAM maps keep their cones)
 and the previous edges that survive become the backend's hint (a CP-SAT hint, a HiGHS MIP start).
 
-Window rule: cones not more than ``near_radius_m`` behind the car (measured along its heading,
+Window rule: cones not more than ``window_behind_m`` behind the car (measured along its heading,
 so the cones beside it stay in), sorted by distance to the car, the first ``max_cones``.
 """
 
@@ -38,7 +38,7 @@ def cone_window(points: np.ndarray, pose: Pose, params: LaneParams) -> tuple[np.
     d = points - pose.xy
     along = d @ pose.heading
     dist = np.hypot(d[:, 0], d[:, 1])
-    ok = np.flatnonzero(along >= -params.near_radius_m)
+    ok = np.flatnonzero(along >= -params.window_behind_m)
     # Ties in distance go by position, so the window does not depend on the input order.
     key = np.round(dist[ok], 9)
     order = ok[np.lexsort((points[ok, 1], points[ok, 0], key))][: int(params.max_cones)]

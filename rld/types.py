@@ -153,12 +153,17 @@ class LaneParams:
     """CLC it_max (Alg. 2)."""
     max_cones: int = 20
     """How many map cones, nearest ahead of the car, RLD's program takes."""
+    window_behind_m: float = 2.0
+    """How far behind the car (along its heading) a cone may lie and still enter RLD's window,
+    metres; the cones beside the car must stay in for the lane to start there. Measured on the
+    shared tracks (R = 50 m, no false positives, every 12th pose): 4.5 m gave 17.9 % critical
+    failures (paths ran back behind the car), 2 m 7.7 %, 0 m 22 % (no start cones)."""
 
     def __post_init__(self) -> None:
         for name, value in self.__dict__.items():
             if not isinstance(value, int | float) or not math.isfinite(float(value)):
                 raise ValueError(f"LaneParams.{name} must be a finite number, got {value!r}")
-            if value <= 0:
+            if value < 0 or (value == 0 and name != "window_behind_m"):
                 raise ValueError(f"LaneParams.{name} must be positive, got {value!r}")
         if self.min_width_m >= self.max_width_m:
             raise ValueError("LaneParams.min_width_m must be below max_width_m")
