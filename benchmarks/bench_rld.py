@@ -1,0 +1,101 @@
+"""RLD latency: the whole call (window, model update, solve, cycle cuts, extraction) for
+n = 12, 16, 20, 30, 40 cones per backend, cold (a fresh solver per call) and warm (one solver
+driven pose after pose, as on the car, so each call is hinted with the previous lane).
+
+Instances: generated tracks (``rld.generator``), the evaluation protocol at R = 50 m with 20 %
+false positives; every ``stride``-th pose of each lap, consecutive poses for the warm runs.
+"""
+
+from __future__ import annotations
+
+import platform
+import time
+
+import numpy as np
+
+from rld.api import LaneSolver
+from rld.generator import generate_track
+from rld.simulation import simulate_lap
+from rld.types import LaneParams
+
+SIZES = (12, 16, 20, 30, 40)
+BACKENDS = ("cpsat", "highs", "cvxpy")
+
+
+def _frames(n_tracks: int, stride: int, fp_rate: float = 0.2):
+    for seed in range(n_tracks):
+        lap = simulate_lap(generate_track(100 + seed), range_m=50.0, fp_rate=fp_rate, seed=seed)
+        for k in range(0, len(lap), stride):
+            yield lap, k
+
+
+def run(sizes=SIZES, backends=BACKENDS, n_tracks: int = 4, stride: int = 25,
+        time_limit_s: float = 1.0, progress: bool = True) -> list[dict]:
+    """One row per (backend, n, warm): median / p95 / max latency in ms and status counts."""
+    from tqdm import tqdm
+
+    frames = list(_frames(n_tracks, stride))
+    rows = []
+    total = len(sizes) * len(backends) * 2 * len(frames)
+    bar = tqdm(total=total, desc="rld latency", disable=not progress)
+    for backend in backends:
+        for n in sizes:
+            params = LaneParams(max_cones=n)
+            # Compile and load everything once, outside the measurement.
+            LaneSolver("rld", params, backend).solve(frames[0][0].frame(0).cones,
+                                                     frames[0][0].frame(0).pose)
+            for warm in (False, True):
+                lat, statuses = [], []
+                solver = None
+                for lap, k in frames:
+                    if warm:
+                        # Warm: the solver saw the previous pose (1 m back) of the same lap.
+                        solver = LaneSolver("rld", params, backend)
+                        prev = lap.frame(max(k - 1, 0))
+                        solver.solve(prev.cones, prev.pose, time_limit_s=time_limit_s)
+                    else:
+                        solver = LaneSolver("rld", params, backend)
+                    f = lap.frame(k)
+                    t0 = time.perf_counter()
+                    lane = solver.solve(f.cones, f.pose, time_limit_s=time_limit_s)
+                    lat.append(time.perf_counter() - t0)
+                    statuses.append(lane.status.name)
+                    bar.update(1)
+                lat_ms = 1000 * np.array(lat)
+                rows.append({
+                    "backend": backend, "n": n, "warm": warm, "calls": len(lat),
+                    "median_ms": float(np.median(lat_ms)),
+                    "p95_ms": float(np.percentile(lat_ms, 95)),
+                    "max_ms": float(lat_ms.max()),
+                    "optimal": statuses.count("OPTIMAL"),
+                    "feasible": statuses.count("FEASIBLE"),
+                    "no_lane": len(statuses) - statuses.count("OPTIMAL")
+                    - statuses.count("FEASIBLE"),
+                })
+    bar.close()
+    return rows
+
+
+def machine() -> str:
+    import os
+
+    return (f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
+            f"{platform.platform()}")
+
+
+def to_markdown(rows: list[dict], time_limit_s: float) -> str:
+    lines = [
+        f"Time limit per call {time_limit_s:g} s; calls past it return the incumbent "
+        "(FEASIBLE) or no lane.",
+        "",
+        "| backend | n | start | calls | median (ms) | p95 (ms) | max (ms) | optimal | "
+        "feasible | no lane |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['backend']} | {r['n']} | {'warm' if r['warm'] else 'cold'} | {r['calls']} | "
+            f"{r['median_ms']:.1f} | {r['p95_ms']:.1f} | {r['max_ms']:.1f} | {r['optimal']} | "
+            f"{r['feasible']} | {r['no_lane']} |"
+        )
+    return "\n".join(lines)
