@@ -116,7 +116,7 @@ class RldModel:
         if window.size < 4:
             return Lane.not_found(points, f"only {window.size} cones ahead of the car", stats=stats)
         program = build_program(sub, pose, self.params, no_crossing=self.no_crossing,
-                                start=local_start)
+                                start=local_start, strengthen=self.backend.strengthen)
         stats.update(program.stats)
         stats["build_time_s"] = time.perf_counter() - t0
         if program.near.sum() < 2:

@@ -33,6 +33,9 @@ class Backend:
     within ``col_lo..col_hi``. ``hint`` is a full 0/1 vector from a previous solution."""
 
     name = "base"
+    #: Whether the program should carry the valid angle-cover rows (``build_program``'s
+    #: ``strengthen``): they tighten an LP relaxation, which helps LP-based MIP solvers.
+    strengthen = True
 
     def solve(
         self, program: LaneProgram, time_limit_s: float, hint: np.ndarray | None = None

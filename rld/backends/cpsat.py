@@ -14,10 +14,15 @@ from rld.program import LaneProgram
 class CpSatBackend(Backend):
     name = "cpsat"
 
-    def __init__(self, workers: int = 1) -> None:
+    #: The valid angle-cover rows slow CP-SAT down (measured on 60 generated frames, n = 12:
+    #: median 19.6 -> 14.9 ms without them); it gets the paper's rows only.
+    strengthen = False
+
+    def __init__(self, workers: int = 1, **parameters) -> None:
         from ortools.sat.python import cp_model  # noqa: F401 (fail early if missing)
 
         self.workers = int(workers)
+        self.parameters = parameters  # any CpSolver parameter by name
 
     def solve(self, program: LaneProgram, time_limit_s: float, hint=None) -> BackendResult:
         from ortools.sat.python import cp_model
@@ -51,6 +56,8 @@ class CpSatBackend(Backend):
         solver = cp_model.CpSolver()
         solver.parameters.max_time_in_seconds = max(float(time_limit_s), 1e-3)
         solver.parameters.num_workers = self.workers
+        for key, value in self.parameters.items():
+            setattr(solver.parameters, key, value)
         status = solver.solve(model)
         elapsed = time.perf_counter() - t0
         if status in (cp_model.OPTIMAL, cp_model.FEASIBLE):
