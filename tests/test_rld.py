@@ -125,8 +125,9 @@ def solve_program(points, pose, p, backend="highs", prune=True):
     """Optimal objective of the program with lazy cycle cuts (inf when infeasible)."""
     from rld.program import cycle_cut
 
-    prog = build_program(points, pose, p, prune=prune)
     be = make_backend(backend)
+    # Each backend gets the program it gets in use (with or without the angle-cover rows).
+    prog = build_program(points, pose, p, prune=prune, strengthen=be.strengthen)
     for _ in range(30):
         res = be.solve(prog, 20.0)
         if res.x is None:
