@@ -294,18 +294,24 @@ def score_lane(
 def circle_crossing(line: np.ndarray, center: np.ndarray, radius_m: float) -> np.ndarray | None:
     """The first point where the polyline ``line``, walked from its start, leaves the circle of
     ``radius_m`` around ``center`` (Huang et al. 3.5: the lane estimate ahead meets the
-    circle). ``None`` when it never reaches the circle."""
+    circle). A segment may start outside, pass through the circle and leave it; a tangent
+    touch does not count. ``None`` when it never leaves the circle."""
     line = np.asarray(line, dtype=np.float64)
     if line.shape[0] < 2:
         return None
-    d = np.hypot(*(line - center).T)
     for i in range(line.shape[0] - 1):
-        if d[i] < radius_m <= d[i + 1]:
-            p, q = line[i] - center, line[i + 1] - center
-            u = q - p
-            a, b, c = u @ u, 2 * (p @ u), p @ p - radius_m**2
-            t = (-b + math.sqrt(max(b * b - 4 * a * c, 0.0))) / (2 * a)
-            return line[i] + t * u
+        p = line[i] - center
+        u = line[i + 1] - line[i]
+        a, b, c = u @ u, 2 * (p @ u), p @ p - radius_m**2
+        disc = b * b - 4 * a * c
+        if a == 0 or disc <= 0:
+            continue
+        t1 = (-b - math.sqrt(disc)) / (2 * a)
+        t2 = (-b + math.sqrt(disc)) / (2 * a)
+        # The segment is inside the circle for t in (t1, t2); it leaves at t2 if that is on
+        # the segment and some part of the segment before it is inside.
+        if 0.0 < t2 <= 1.0 and max(t1, 0.0) < t2:
+            return line[i] + t2 * u
     return None
 
 

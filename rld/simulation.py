@@ -87,8 +87,8 @@ class Lap:
     ) -> None:
         if not 0.0 <= fp_rate < 1.0:
             raise ValueError(f"fp_rate must be in [0, 1), got {fp_rate}")
-        if range_m <= 0:
-            raise ValueError(f"range_m must be positive, got {range_m}")
+        if not range_m > 0 or not np.isfinite(range_m):
+            raise ValueError(f"range_m must be a positive number, got {range_m}")
         self.track = track
         self.range_m = float(range_m)
         self.fp_rate = float(fp_rate)

@@ -1,0 +1,728 @@
+"""Per-pose metrics of the evaluation protocol (DESIGN.md, "Evaluation protocol", step 7) and the
+stability ratio of Huang et al. (2009, section 3.5, eq. 5).
+
+Every expected number below is worked out by hand in the comments (or by a brute force that
+does not share code with ``rld.metrics``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+from rld.generator import generate_track
+from rld.metrics import (
+    CATEGORIES,
+    PoseScore,
+    categorize,
+    circle_crossing,
+    lane_iou,
+    lane_iou20,
+    score_lane,
+    side_divergence,
+    stability_ratio,
+    truncate_polyline,
+)
+from rld.simulation import Frame, simulate_lap
+from rld.types import Pose
+
+SQRT13 = math.sqrt(13.0)  # car at the origin to the first cone at (3, +-2)
+ORIGIN = Pose(0.0, 0.0, 0.0)
+
+
+# --------------------------------------------------------------------------------------------
+# Hand-built frames
+# --------------------------------------------------------------------------------------------
+
+
+class Hand:
+    """A hand-built frame over explicit boundaries.
+
+    ``L[i]``, ``R[i]``, ``X[k]`` are the frame indices of left cone i, right cone i and extra
+    (false-positive) point k; ``gt_left`` / ``gt_right`` are positions along the boundaries;
+    ``missing_left`` / ``missing_right`` are positions not yet in the map. ``perm`` shuffles the
+    frame (to check that nothing depends on the frame order).
+    """
+
+    def __init__(
+        self,
+        left_xy,
+        right_xy,
+        gt_left=None,
+        gt_right=None,
+        extra=(),
+        pose=ORIGIN,
+        closed=False,
+        missing_left=(),
+        missing_right=(),
+        perm_seed=None,
+    ):
+        left_xy = np.asarray(left_xy, float).reshape(-1, 2)
+        right_xy = np.asarray(right_xy, float).reshape(-1, 2)
+        extra = np.asarray(extra, float).reshape(-1, 2)
+        nl, nr, nx = len(left_xy), len(right_xy), len(extra)
+        allxy = np.vstack([left_xy, right_xy, extra])
+        source_all = np.concatenate([np.arange(nl + nr), -1 - np.arange(nx)])
+        keep = np.ones(len(allxy), dtype=bool)
+        keep[np.asarray(missing_left, dtype=int)] = False
+        keep[nl + np.asarray(missing_right, dtype=int)] = False
+        members = np.flatnonzero(keep)
+        if perm_seed is not None:
+            members = members[np.random.default_rng(perm_seed).permutation(members.size)]
+        to_frame = np.full(len(allxy), -1, dtype=np.int64)
+        to_frame[members] = np.arange(members.size)
+        self.L = to_frame[:nl]
+        self.R = to_frame[nl : nl + nr]
+        self.X = to_frame[nl + nr :]
+        gl = np.arange(nl) if gt_left is None else np.asarray(gt_left, dtype=int)
+        gr = np.arange(nr) if gt_right is None else np.asarray(gt_right, dtype=int)
+        self.frame = Frame(
+            index=0,
+            pose=pose,
+            cones=allxy[members],
+            source=source_all[members],
+            gt_left=self.L[gl],
+            gt_right=self.R[gr],
+            left_seq=self.L.copy(),
+            right_seq=self.R.copy(),
+            closed=closed,
+        )
+
+    def score(self, left, right, ok=True, closed=False) -> PoseScore:
+        return score_lane(self.frame, np.asarray(left, int), np.asarray(right, int), ok, closed)
+
+
+def straight(n, spacing=3.0, first=3.0, half_width=2.0):
+    """n cones per side along +x, ``spacing`` apart from x = ``first``, at y = +-half_width."""
+    x = first + spacing * np.arange(n)
+    return (
+        np.column_stack([x, np.full(n, half_width)]),
+        np.column_stack([x, np.full(n, -half_width)]),
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# The ground truth scores "gt"
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("perm_seed", [None, 3])
+def test_ground_truth_is_gt_on_hand_frame(perm_seed):
+    left, right = straight(6)
+    h = Hand(left, right, perm_seed=perm_seed)
+    s = h.score(h.frame.gt_left, h.frame.gt_right)
+    assert s.category == s.category_tolerant == "gt"
+    assert s.exact
+    assert s.iou == pytest.approx(1.0)
+    assert s.iou20 == pytest.approx(1.0)
+    assert s.divergence_m == math.inf and s.divergence_tolerant_m == math.inf
+    assert not s.critical and not s.critical_tolerant
+    # Lengths: 5 gaps of 3 m per side.
+    assert s.true_length_m == pytest.approx(15.0)
+    assert s.pred_length_m == pytest.approx(15.0)
+
+
+@pytest.mark.parametrize("seed", [0, 3])
+def test_ground_truth_is_gt_on_simulated_frames(seed):
+    lap = simulate_lap(generate_track(seed), range_m=50.0, fp_rate=0.3, seed=seed)
+    ks = list(range(5, len(lap), 60)) + [len(lap) - 1]
+    saw_closed = False
+    for k in ks:
+        f = lap.frame(k)
+        assert f.gt_left.size >= 3 and f.gt_right.size >= 3
+        s = score_lane(f, f.gt_left, f.gt_right, closed=f.gt_closed)
+        saw_closed |= f.gt_closed
+        assert s.category == "gt" and s.category_tolerant == "gt", k
+        assert s.exact
+        assert s.iou == pytest.approx(1.0)
+        assert s.iou20 == pytest.approx(1.0)
+        assert s.divergence_m == math.inf
+        assert not s.critical
+    assert saw_closed  # the last frame at R = 50 holds the whole loop
+
+
+# --------------------------------------------------------------------------------------------
+# Divergence and categories
+# --------------------------------------------------------------------------------------------
+
+
+def hairpin():
+    """A left U-turn: out along +x (left y=+2, right y=-2, cones at x=3,6,9,12), a half turn
+    around (12, 6) (left radius 4, right radius 8), and back along -x (left y=10, right y=14,
+    cones at x=9,6,3). The infield between the legs is 8 m wide."""
+    lx = [(3, 2), (6, 2), (9, 2), (12, 2)]
+    lx += [(12 + 4 * math.cos(a), 6 + 4 * math.sin(a)) for a in np.radians([-45, 0, 45, 90])]
+    lx += [(9, 10), (6, 10), (3, 10)]
+    rx = [(3, -2), (6, -2), (9, -2), (12, -2)]
+    rx += [
+        (12 + 8 * math.cos(a), 6 + 8 * math.sin(a)) for a in np.radians([-60, -30, 0, 30, 60, 90])
+    ]
+    rx += [(9, 14), (6, 14), (3, 14)]
+    return np.array(lx), np.array(rx)
+
+
+def test_shortcut_across_the_infield_is_critical():
+    left, right = hairpin()
+    h = Hand(left, right)
+    # The left boundary takes (3,2), (6,2), (9,2), then cuts across the infield to (9,10) on the
+    # way back and follows it: a shortcut at about 10 m.
+    pred_left = h.L[[0, 1, 2, 8, 9, 10]]
+    s = h.score(pred_left, h.frame.gt_right)
+    # Arc along the truth from the car to the last matched cone (9, 2): sqrt(3^2+2^2) + 3 + 3.
+    expected = SQRT13 + 6.0
+    assert expected == pytest.approx(9.6056, abs=1e-4)
+    assert s.category == "diverging_lt20"
+    assert s.critical
+    assert s.divergence_m == pytest.approx(expected)
+    # (9, 10) is a boundary cone: the tolerant rule does not excuse it.
+    assert s.category_tolerant == "diverging_lt20" and s.critical_tolerant
+    assert s.divergence_tolerant_m == pytest.approx(expected)
+    assert not s.exact
+
+
+def test_lane_divergence_is_the_minimum_over_sides():
+    left, right = straight(20)
+    h = Hand(left, right, extra=[(30.0, 5.0), (12.0, -5.0)])
+    # Left leaves after left cone 8 (x = 27): sqrt(13) + 24. Right leaves after right cone 2
+    # (x = 9): sqrt(13) + 6.
+    pl = np.concatenate([h.L[:9], h.X[[0]], h.L[10:]])
+    pr = np.concatenate([h.R[:3], h.X[[1]], h.R[4:]])
+    assert h.score(pl, h.frame.gt_right).divergence_m == pytest.approx(SQRT13 + 24.0)
+    assert h.score(h.frame.gt_left, pr).divergence_m == pytest.approx(SQRT13 + 6.0)
+    s = h.score(pl, pr)
+    assert s.divergence_m == pytest.approx(SQRT13 + 6.0)
+    assert s.category == "diverging_lt20"
+
+
+def test_cut_two_cones_short_is_too_short():
+    # 4 cones per side, 3 m apart: each true side is 9 m long.
+    left, right = straight(4)
+    h = Hand(left, right)
+    s = h.score(h.L[:2], h.R[:2])  # 3 m < 4.5 m
+    assert s.category == "too_short" and s.category_tolerant == "too_short"
+    assert not s.critical
+    assert s.divergence_m == math.inf
+    assert s.pred_length_m == pytest.approx(3.0) and s.true_length_m == pytest.approx(9.0)
+    # One side short is enough.
+    assert h.score(h.L[:2], h.R).category == "too_short"
+    # One cone short keeps 6 m >= 4.5 m: near_gt.
+    s1 = h.score(h.L[:3], h.R[:3])
+    assert s1.category == "near_gt"
+    assert s1.divergence_m == math.inf
+
+
+def test_stopping_early_but_keeping_more_than_half_is_near_gt():
+    # 20 cones per side, x = 3..60: each side 57 m. Half: 28.5 m.
+    left, right = straight(20)
+    h = Hand(left, right)
+    assert h.score(h.L[:12], h.R).category == "near_gt"  # 33 m
+    assert h.score(h.L[:10], h.R).category == "too_short"  # 27 m
+
+
+def test_divergence_after_20m_with_high_iou_is_near_gt():
+    left, right = straight(20)
+    # Left cone 9 at (30, 2) replaced by a point 0.3 m off the line.
+    h = Hand(left, right, extra=[(30.0, 2.3)])
+    pl = np.concatenate([h.L[:9], h.X[[0]], h.L[10:]])
+    s = h.score(pl, h.R)
+    # Truth: rectangle [3, 60] x [-2, 2] = 228 m^2. Prediction adds a triangle of base 6 m
+    # (27..33) and height 0.3 m = 0.9 m^2.
+    assert s.iou == pytest.approx(228.0 / 228.9)
+    assert s.divergence_m == pytest.approx(SQRT13 + 24.0)  # last match at x = 27
+    assert s.category == "near_gt"
+    assert not s.critical
+
+
+def test_divergence_after_20m_with_low_iou_is_diverging_ge20():
+    left, right = straight(20)
+    h = Hand(left, right, extra=[(27.0, -1.0)])
+    pl = np.concatenate([h.L[:9], h.X[[0]]])
+    s = h.score(pl, h.R)
+    # Prediction: [3, 27] x [-2, 2] (96 m^2) plus the triangle (27,-1), (60,-2), (27,-2)
+    # (0.5 * 33 * 1 = 16.5 m^2), all inside the truth (228 m^2): IoU = 112.5 / 228.
+    assert s.iou == pytest.approx(112.5 / 228.0)
+    assert s.divergence_m == pytest.approx(SQRT13 + 24.0)
+    assert s.category == "diverging_ge20"
+    assert not s.critical
+
+
+def test_cone_taken_after_the_truth_ends_diverges():
+    left, right = straight(4)
+    h = Hand(left, right, extra=[(15.0, 2.0)])  # on the extension of the left line, past its end
+    s = h.score(np.concatenate([h.L, h.X]), h.R)
+    # Every true cone was matched: sqrt(13) + 9 m.
+    assert s.divergence_m == pytest.approx(SQRT13 + 9.0)
+    assert s.category == "diverging_lt20"
+
+
+def test_prefix_rule():
+    # Left and right cones at x = -16.5 + 3 i, i = 0..15: six behind the car, ten ahead. The truth
+    # starts at i = 6 (x = 1.5, the nearest not behind the car).
+    x = -16.5 + 3.0 * np.arange(16)
+    left = np.column_stack([x, np.full(16, 2.0)])
+    right = np.column_stack([x, np.full(16, -2.0)])
+    h = Hand(left, right, gt_left=range(6, 16), gt_right=range(6, 16), extra=[(1.5, 0.0)])
+    gr = h.frame.gt_right
+
+    def left_cat(pos, first=()):
+        pl = np.concatenate([np.asarray(first, int), h.L[list(pos)]])
+        return h.score(pl, gr)
+
+    # Up to five boundary cones preceding gt[0] are fine.
+    for n_pre in range(1, 6):
+        s = left_cat(range(6 - n_pre, 16))
+        assert s.category == "near_gt" and s.divergence_m == math.inf, n_pre
+        assert not s.exact
+    # Six are not: the first cone is neither a permitted prefix nor gt[0] / gt[1].
+    s = left_cat(range(0, 16))
+    assert s.category == "diverging_lt20" and s.divergence_m == 0.0 and s.critical
+    # gt[0] may be skipped (start at gt[1]), also after a prefix ...
+    s = left_cat(range(7, 16))
+    assert s.category == "near_gt" and s.divergence_m == math.inf
+    s = left_cat([4, 5] + list(range(7, 16)))
+    assert s.category == "near_gt" and s.divergence_m == math.inf
+    # ... but not gt[0] and gt[1] both.
+    s = left_cat(range(8, 16))
+    assert s.category == "diverging_lt20" and s.divergence_m == 0.0
+    # A prefix walking backwards is not a prefix.
+    s = left_cat([5, 4] + list(range(6, 16)))
+    assert s.category == "diverging_lt20" and s.divergence_m == 0.0
+    # Starting with a cone of the wrong kind (the other boundary, or a false positive) diverges
+    # at 0 m.
+    s = left_cat(range(6, 16), first=[h.R[6]])
+    assert s.category == "diverging_lt20" and s.divergence_m == 0.0 and s.critical
+    s = left_cat(range(6, 16), first=[h.X[0]])
+    assert s.category == "diverging_lt20" and s.divergence_m == 0.0 and s.critical
+
+
+def test_prefix_rule_wraps_around_a_closed_boundary():
+    # A ring: left (inner) radius 8 with 16 cones, right radius 12 with 24 cones, driven
+    # counter-clockwise; the car at (10, 0) heading +y. Cone i sits at angle 2 pi (i + 0.5) / n,
+    # so left 0 and right 0 are just ahead of the car and the last ones just behind it.
+    def ring(r, n):
+        a = 2 * math.pi * (np.arange(n) + 0.5) / n
+        return np.column_stack([r * np.cos(a), r * np.sin(a)])
+
+    left, right = ring(8.0, 16), ring(12.0, 24)
+    kwargs = dict(
+        gt_left=range(0, 8),
+        gt_right=range(0, 12),
+        pose=Pose(10.0, 0.0, math.pi / 2),
+        missing_left=range(8, 12),
+        missing_right=range(12, 20),
+    )
+    closed = Hand(left, right, closed=True, **kwargs)
+    f = closed.frame
+    assert (f.left_seq[8:12] == -1).all() and (f.right_seq[12:20] == -1).all()
+    pl = closed.L[[14, 15] + list(range(0, 8))]  # two cones before gt[0], across the wrap
+    s = closed.score(pl, f.gt_right)
+    assert s.category == "near_gt" and s.divergence_m == math.inf
+    # The same prediction on an open boundary: 14 and 15 come after 0, not before it.
+    opened = Hand(left, right, closed=False, **kwargs)
+    s = opened.score(opened.L[[14, 15] + list(range(0, 8))], opened.frame.gt_right)
+    assert s.category == "diverging_lt20" and s.divergence_m == 0.0
+
+
+def test_tolerant_rule_uses_the_closing_segment_of_a_closed_boundary():
+    # Same ring; a false positive 0.2 m outside the chord from left 15 (-11.25 deg) to left 0
+    # (+11.25 deg), whose midpoint is (8 cos 11.25 deg, 0). Its nearest other left segment is
+    # more than 1 m away, so only the closing segment makes it "on the line".
+    def ring(r, n):
+        a = 2 * math.pi * (np.arange(n) + 0.5) / n
+        return np.column_stack([r * np.cos(a), r * np.sin(a)])
+
+    fp = (8 * math.cos(math.radians(11.25)) + 0.2, 0.0)
+    h = Hand(
+        ring(8.0, 16),
+        ring(12.0, 24),
+        gt_left=range(0, 16),
+        gt_right=range(0, 24),
+        extra=[fp],
+        pose=Pose(10.0, 0.0, math.pi / 2),
+        closed=True,
+    )
+    pl = np.concatenate([h.X, h.L])
+    s = h.score(pl, h.R, closed=True)
+    assert s.category == "diverging_lt20" and s.divergence_m == 0.0
+    assert s.category_tolerant == "near_gt" and s.divergence_tolerant_m == math.inf
+
+
+def test_tolerant_rule_skips_points_on_the_true_line():
+    left, right = straight(10)
+    # Between left cones 2 (x=9) and 3 (x=12): 0.3 m, 0.45 m, 0.6 m and 1 m off the left line.
+    h = Hand(left, right, extra=[(10.5, 2.3), (10.5, 1.55), (10.5, 2.6), (10.5, 3.0)])
+    strict_div = SQRT13 + 6.0  # last true cone before the point: x = 9
+    for k, tolerated in ((0, True), (1, True), (2, False), (3, False)):
+        pl = np.concatenate([h.L[:3], h.X[[k]], h.L[3:]])
+        s = h.score(pl, h.R)
+        assert s.category == "diverging_lt20" and s.critical, k
+        assert s.divergence_m == pytest.approx(strict_div), k
+        if tolerated:
+            assert s.category_tolerant == "near_gt" and not s.critical_tolerant, k
+            assert s.divergence_tolerant_m == math.inf, k
+        else:
+            assert s.category_tolerant == "diverging_lt20" and s.critical_tolerant, k
+            assert s.divergence_tolerant_m == pytest.approx(strict_div), k
+
+
+def test_tolerant_rule_does_not_excuse_boundary_cones():
+    # A right cone 0.3 m from the left line (a very narrow lane) is on a boundary: not skipped.
+    left = np.array([(3, 2), (6, 2), (9, 2), (12, 2)], float)
+    right = np.array([(3, -2), (6, -2), (10.5, 1.7), (12, -2)], float)
+    h = Hand(left, right)
+    pl = np.concatenate([h.L[:3], h.R[[2]], h.L[3:]])
+    s = h.score(pl, h.R)
+    assert s.category_tolerant == "diverging_lt20"
+    assert s.divergence_tolerant_m == pytest.approx(SQRT13 + 6.0)
+
+
+def test_failed():
+    left, right = straight(4)
+    h = Hand(left, right)
+    s = h.score(h.L, h.R, ok=False)
+    assert s.category == s.category_tolerant == "failed"
+    assert s.critical and s.critical_tolerant
+    assert s.iou == 0.0
+    assert s.true_length_m == pytest.approx(9.0)
+    s = h.score([], [])
+    assert s.category == s.category_tolerant == "failed" and s.critical
+    # One empty side is not "failed": it stopped early at 0 m.
+    s = h.score(h.L, [])
+    assert s.category == "too_short" and not s.critical
+
+
+def test_categories_and_precedence():
+    assert set(CATEGORIES) == {
+        "gt",
+        "near_gt",
+        "too_short",
+        "diverging_ge20",
+        "diverging_lt20",
+        "failed",
+    }
+    from rld.metrics import SideDivergence
+
+    fine = SideDivergence(False, math.inf, False, 5)
+    short = SideDivergence(False, math.inf, True, 2)
+    near = SideDivergence(True, 19.99, False, 3)
+    far = SideDivergence(True, 20.0, False, 8)
+    lens, true = (10.0, 10.0), (10.0, 10.0)
+    assert categorize(False, True, (fine, fine), 1.0, lens, true) == "failed"
+    assert categorize(True, True, (near, near), 0.0, lens, true) == "gt"
+    assert categorize(True, False, (near, far), 1.0, lens, true) == "diverging_lt20"
+    assert categorize(True, False, (fine, far), 0.9, lens, true) == "near_gt"
+    assert categorize(True, False, (fine, far), 0.899, lens, true) == "diverging_ge20"
+    assert categorize(True, False, (fine, far), math.nan, lens, true) == "diverging_ge20"
+    assert categorize(True, False, (short, fine), 0.5, (4.99, 10.0), true) == "too_short"
+    assert categorize(True, False, (short, fine), 0.5, (5.0, 10.0), true) == "near_gt"
+    assert categorize(True, False, (fine, fine), 0.5, (1.0, 1.0), true) == "near_gt"
+
+
+def test_side_divergence_direct():
+    cones = np.array([(3, 2), (6, 2), (9, 2), (12, 2), (5, 5)], float)
+    gt = np.array([0, 1, 2, 3])
+    car = np.zeros(2)
+    d = side_divergence(np.array([0, 1, 2, 3]), gt, gt, cones, car, False)
+    assert not d.diverged and not d.stopped_early and d.matched == 4
+    d = side_divergence(np.array([0, 1]), gt, gt, cones, car, False)
+    assert not d.diverged and d.stopped_early and d.matched == 2
+    d = side_divergence(np.array([0, 1, 4]), gt, gt, cones, car, False)
+    assert d.diverged and d.matched == 2 and d.distance_m == pytest.approx(SQRT13 + 3.0)
+    d = side_divergence(np.array([1, 2, 4]), gt, gt, cones, car, False)  # skipped gt[0]
+    assert d.diverged and d.distance_m == pytest.approx(SQRT13 + 6.0)
+    d = side_divergence(np.zeros(0, int), gt, gt, cones, car, False)
+    assert not d.diverged and d.stopped_early
+    d = side_divergence(np.array([0]), np.zeros(0, int), gt, cones, car, False)
+    assert d.diverged and d.distance_m == 0.0
+    skip = np.array([False, False, False, False, True])
+    d = side_divergence(np.array([0, 1, 4, 2, 3]), gt, gt, cones, car, False, skip)
+    assert not d.diverged and d.matched == 4
+
+
+# --------------------------------------------------------------------------------------------
+# IoU and IoU20
+# --------------------------------------------------------------------------------------------
+
+
+def rect_lane(x0, x1, half_width, n=5):
+    x = np.linspace(x0, x1, n)
+    return (
+        np.column_stack([x, np.full(n, half_width)]),
+        np.column_stack([x, np.full(n, -half_width)]),
+    )
+
+
+def test_lane_iou_hand_worked():
+    a = rect_lane(0, 10, 2)  # 10 x 4
+    b = rect_lane(0, 5, 2)  # 5 x 4, sharing the end at x = 0
+    assert lane_iou(*a, *b) == pytest.approx(0.5)
+    assert lane_iou(*b, *a) == pytest.approx(0.5)
+    assert lane_iou(*a, *a) == pytest.approx(1.0)
+    # Disjoint lanes.
+    assert lane_iou(*rect_lane(0, 10, 2), *rect_lane(20, 30, 2)) == 0.0
+    # Overlap in both directions: [0,10]x[-2,2] vs [5,15]x[-1,1]: 10 / (40 + 20 - 10).
+    assert lane_iou(*a, *rect_lane(5, 15, 1)) == pytest.approx(10.0 / 50.0)
+    # No area at all: NaN.
+    assert math.isnan(
+        lane_iou(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 2)))
+    )
+
+
+def test_lane_iou_repairs_crossed_boundaries():
+    # Left from (0,2) to (10,-2), right from (0,-2) to (10,2): a bow-tie, repaired into two
+    # triangles meeting at (5, 0), each 0.5 * 4 * 5 = 10 m^2, inside the 10 x 4 rectangle.
+    bow_l = np.array([(0, 2), (10, -2)], float)
+    bow_r = np.array([(0, -2), (10, 2)], float)
+    assert lane_iou(bow_l, bow_r, *rect_lane(0, 10, 2)) == pytest.approx(20.0 / 40.0)
+
+
+def test_lane_iou_closed_lanes():
+    def square(h):
+        return np.array([(-h, -h), (h, -h), (h, h), (-h, h)], float)
+
+    # Annulus between squares of side 8 and 4: 64 - 16 = 48; between 8 and 2: 64 - 4 = 60.
+    # The first lies inside the second: IoU = 48 / 60.
+    assert lane_iou(square(2), square(4), square(2), square(4), True, True) == pytest.approx(1.0)
+    assert lane_iou(square(2), square(4), square(1), square(4), True, True) == pytest.approx(0.8)
+    # The inner ring may be on either side.
+    assert lane_iou(square(4), square(2), square(1), square(4), True, True) == pytest.approx(0.8)
+
+
+@settings(max_examples=60)
+@given(
+    a=st.floats(1.0, 50.0),
+    b=st.floats(1.0, 50.0),
+    wa=st.floats(0.5, 4.0),
+    wb=st.floats(0.5, 4.0),
+)
+def test_lane_iou_of_rectangles(a, b, wa, wb):
+    inter = min(a, b) * 2 * min(wa, wb)
+    union = a * 2 * wa + b * 2 * wb - inter
+    assert lane_iou(*rect_lane(0, a, wa, 7), *rect_lane(0, b, wb, 4)) == pytest.approx(
+        inter / union, rel=1e-9
+    )
+
+
+def test_lane_iou20_cuts_at_20m():
+    heading = np.array([1.0, 0.0])
+    # Truth: cones every 5 m from x = 0 to 40, y = +-2 (160 m^2).
+    gl, gr = rect_lane(0, 40, 2, 9)
+    # Prediction: the same for the first 20 m, then the left side moves out to y = 4 at x = 25.
+    pl = gl.copy()
+    pl[5:, 1] = 4.0
+    # Full IoU: extra triangle (20..25, height 2) = 5 and rectangle [25,40]x[2,4] = 30.
+    assert lane_iou(pl, gr, gl, gr) == pytest.approx(160.0 / 195.0)
+    assert lane_iou20(pl, gr, gl, gr, heading) == pytest.approx(1.0)
+    # A short horizon that is right: IoU 0.5, IoU20 1.
+    sl, sr = rect_lane(0, 20, 2, 5)
+    assert lane_iou(sl, sr, gl, gr) == pytest.approx(0.5)
+    assert lane_iou20(sl, sr, gl, gr, heading) == pytest.approx(1.0)
+    # A short horizon that is wrong (half as wide): [0,20]x[-1,1] inside [0,20]x[-2,2].
+    wl, wr = rect_lane(0, 20, 1, 5)
+    assert lane_iou20(wl, wr, gl, gr, heading) == pytest.approx(40.0 / 80.0)
+
+
+def test_lane_iou20_drops_what_lies_behind_the_first_true_cones():
+    heading = np.array([1.0, 0.0])
+    gl, gr = rect_lane(0, 40, 2, 9)
+    # The prediction starts 5 m behind the first true cones: its first 20 m end at x = 15, and
+    # the part behind x = 0 is dropped: [0, 15] vs [0, 20] -> 60 / 80.
+    pl, pr = rect_lane(-5, 40, 2, 10)
+    assert lane_iou20(pl, pr, gl, gr, heading) == pytest.approx(0.75)
+    # Mirrored: driving along -x.
+    m = np.array([-1.0, 1.0])
+    assert lane_iou20(pl * m, pr * m, gl * m, gr * m, -heading) == pytest.approx(0.75)
+    # Rotated by 37 degrees about an arbitrary point.
+    c, s = math.cos(0.65), math.sin(0.65)
+    rot = np.array([[c, -s], [s, c]])
+
+    def tf(p):
+        return p @ rot.T + np.array([12.0, -7.0])
+
+    assert lane_iou20(tf(pl), tf(pr), tf(gl), tf(gr), rot @ heading) == pytest.approx(0.75)
+
+
+def test_lane_iou20_nan_without_a_true_lane():
+    gl, gr = rect_lane(0, 40, 2, 9)
+    assert math.isnan(lane_iou20(gl, gr, np.zeros((0, 2)), gr, np.array([1.0, 0.0])))
+    assert math.isnan(lane_iou20(gl, gr, gl, np.zeros((0, 2)), np.array([1.0, 0.0])))
+
+
+def test_score_lane_reports_iou20_of_a_short_correct_lane():
+    left, right = straight(14)  # x = 3..42
+    h = Hand(left, right)
+    # Truth: x = 3..42 (39 m); IoU20 keeps x = 3..23 of it.
+    # The first 8 cones per side (x = 3..24, 21 m): IoU 21 / 39, IoU20 1 (both cut at x = 23).
+    s = h.score(h.L[:8], h.R[:8])
+    assert s.iou == pytest.approx(21.0 / 39.0)
+    assert s.iou20 == pytest.approx(1.0)
+    assert s.category == "near_gt"  # 21 m >= 19.5 m
+    # The first 7 (x = 3..21, 18 m): IoU 18 / 39, IoU20 18 / 20.
+    s = h.score(h.L[:7], h.R[:7])
+    assert s.iou == pytest.approx(18.0 / 39.0)
+    assert s.iou20 == pytest.approx(0.9)
+    assert s.category == "too_short"
+
+
+# --------------------------------------------------------------------------------------------
+# truncate_polyline
+# --------------------------------------------------------------------------------------------
+
+
+def test_truncate_polyline_hand_worked():
+    xy = np.array([(0, 0), (3, 0), (3, 4)], float)  # 3 + 4 = 7 m
+    np.testing.assert_allclose(truncate_polyline(xy, 5.0), [(0, 0), (3, 0), (3, 2)])
+    np.testing.assert_allclose(truncate_polyline(xy, 1.5), [(0, 0), (1.5, 0)])
+    np.testing.assert_allclose(truncate_polyline(xy, 3.0), [(0, 0), (3, 0)])
+    np.testing.assert_allclose(truncate_polyline(xy, 7.0), xy)
+    np.testing.assert_allclose(truncate_polyline(xy, 20.0), xy)
+    np.testing.assert_allclose(truncate_polyline(xy, 0.0), [(0, 0)])
+    one = np.array([(1.0, 2.0)])
+    np.testing.assert_allclose(truncate_polyline(one, 5.0), one)
+    assert truncate_polyline(np.zeros((0, 2)), 5.0).shape == (0, 2)
+    # The input is not modified, and a copy is returned.
+    out = truncate_polyline(xy, 20.0)
+    out[0] = 99
+    assert xy[0, 0] == 0
+
+
+@settings(max_examples=60)
+@given(
+    pts=st.lists(st.tuples(st.floats(-30, 30), st.floats(-30, 30)), min_size=2, max_size=8),
+    length=st.floats(0.01, 100.0),
+)
+def test_truncate_polyline_brute_force(pts, length):
+    xy = np.array(pts, float)
+    total = float(np.hypot(*np.diff(xy, axis=0).T).sum())
+    out = truncate_polyline(xy, length)
+    got = float(np.hypot(*np.diff(out, axis=0).T).sum()) if len(out) > 1 else 0.0
+    assert got == pytest.approx(min(length, total), abs=1e-7)
+    # A prefix of the input, plus at most one interpolated end point on the next segment.
+    k = len(out) - 1
+    np.testing.assert_array_equal(out[:k], xy[:k])
+    if k < len(xy):
+        a, b = xy[k - 1], xy[k]
+        cross = (b - a)[0] * (out[k] - a)[1] - (b - a)[1] * (out[k] - a)[0]
+        assert abs(cross) <= 1e-6 * max(1.0, float(np.hypot(*(b - a))) ** 2)
+
+
+# --------------------------------------------------------------------------------------------
+# circle_crossing and the stability ratio (Huang et al. 2009, eq. 5)
+# --------------------------------------------------------------------------------------------
+
+
+def test_circle_crossing_hand_worked():
+    c = np.zeros(2)
+    # Leaves the r = 5 circle on the segment (3,0)-(3,10) at (3, 4).
+    p = circle_crossing(np.array([(0, 0), (3, 0), (3, 10)], float), c, 5.0)
+    np.testing.assert_allclose(p, (3, 4))
+    # Starting outside: the entry at (5, 0) does not count, the exit at (0, 5) does.
+    p = circle_crossing(np.array([(20, 0), (0, 0), (0, 20)], float), c, 5.0)
+    np.testing.assert_allclose(p, (0, 5), atol=1e-12)
+    # The first exit of several.
+    p = circle_crossing(np.array([(0, 0), (10, 0), (0, 3), (0, 10)], float), c, 5.0)
+    np.testing.assert_allclose(p, (5, 0), atol=1e-12)
+    # Ending exactly on the circle.
+    np.testing.assert_allclose(circle_crossing(np.array([(0, 0), (5, 0)], float), c, 5.0), (5, 0))
+    # Off-centre circle.
+    p = circle_crossing(np.array([(1, 1), (1, 11)], float), np.array([1.0, 1.0]), 5.0)
+    np.testing.assert_allclose(p, (1, 6))
+    # Never reaching the circle, or a single point.
+    assert circle_crossing(np.array([(0, 0), (3, 0), (3, 3)], float), c, 5.0) is None
+    assert circle_crossing(np.array([(0, 0)], float), c, 5.0) is None
+
+
+def test_circle_crossing_segment_passing_through():
+    c = np.zeros(2)
+    # From (-20, 1) to (20, 1): it enters the r = 5 circle at (-sqrt(24), 1) and leaves it at
+    # (sqrt(24), 1).
+    p = circle_crossing(np.array([(-20, 1), (20, 1)], float), c, 5.0)
+    assert p is not None
+    np.testing.assert_allclose(p, (math.sqrt(24.0), 1.0))
+    # The same after a first segment that stays outside.
+    p = circle_crossing(np.array([(-20, 30), (-20, 1), (20, 1)], float), c, 5.0)
+    np.testing.assert_allclose(p, (math.sqrt(24.0), 1.0))
+    # A tangent touch at (0, 5) is no crossing; the line does not leave the circle.
+    assert circle_crossing(np.array([(-20, 5), (20, 5)], float), c, 5.0) is None
+    # Starting on the circle and moving out: never inside, so it never leaves.
+    assert circle_crossing(np.array([(5, 0), (10, 0)], float), c, 5.0) is None
+    # Starting on the circle and moving in: it leaves on the far side at (-5, 0).
+    p = circle_crossing(np.array([(5, 0), (-10, 0)], float), c, 5.0)
+    np.testing.assert_allclose(p, (-5, 0), atol=1e-12)
+
+
+def _first_exit_brute(xy: np.ndarray, r: float, step: float = 0.005):
+    """Densely sampled: the first sample at or beyond r that follows a sample inside."""
+    samples = []
+    for a, b in zip(xy[:-1], xy[1:], strict=False):
+        n = max(2, int(np.hypot(*(b - a)) / step) + 2)
+        t = np.linspace(0.0, 1.0, n)[:, None]
+        samples.append(a + t * (b - a))
+    dense = np.vstack(samples)
+    inside = np.hypot(*dense.T) < r
+    exits = np.flatnonzero(~inside[1:] & inside[:-1]) + 1
+    return dense[exits[0]] if exits.size else None
+
+
+@settings(max_examples=60)
+@given(
+    pts=st.lists(st.tuples(st.floats(-25, 25), st.floats(-25, 25)), min_size=1, max_size=5),
+    r=st.floats(1.0, 20.0),
+    from_centre=st.booleans(),
+)
+def test_circle_crossing_brute_force(pts, r, from_centre):
+    # Lines from the car forward (starting at the centre), or from anywhere.
+    xy = np.array(pts, float)
+    if from_centre or len(xy) < 2:
+        xy = np.vstack([[0.0, 0.0], xy])
+    # Skip near-tangent cases, which a sampled line cannot resolve.
+    a, b = xy[:-1], xy[1:]
+    u = b - a
+    t = np.clip(-np.einsum("ij,ij->i", a, u) / np.maximum(np.einsum("ij,ij->i", u, u), 1e-12), 0, 1)
+    closest = np.hypot(*(a + t[:, None] * u).T)
+    assume(np.all(np.abs(closest - r) > 0.05))
+    want = _first_exit_brute(xy, r)
+    p = circle_crossing(xy, np.zeros(2), r)
+    if want is None:
+        assert p is None
+    else:
+        assert p is not None
+        assert float(np.hypot(*p)) == pytest.approx(r, abs=1e-7)
+        assert float(np.hypot(*(p - want))) < 0.02
+
+
+def test_stability_ratio_hand_worked():
+    c = np.zeros(2)
+    line0 = np.array([(0, 0), (20, 0)], float)
+    line1 = np.array([(0, 0.3), (20, 0.3)], float)
+    # p0 = (10, 0), p1 = (sqrt(100 - 0.09), 0.3).
+    expected = math.hypot(10 - math.sqrt(99.91), 0.3)
+    assert stability_ratio(line0, line1, c, 10.0, 1.0) == pytest.approx(expected, rel=1e-9)
+    assert stability_ratio(line0, line1, c, 10.0, 1.0) == pytest.approx(0.3, abs=1e-3)
+    assert stability_ratio(line0, line1, c, 10.0, 2.0) == pytest.approx(expected / 2, rel=1e-9)
+    # p0 = (10, 0), p1 = (6, 8) on the line to (12, 16): |p0 - p1| = sqrt(80); d_v = 2.
+    line2 = np.array([(0, 0), (12, 16)], float)
+    assert stability_ratio(line0, line2, c, 10.0, 2.0) == pytest.approx(math.sqrt(20.0))
+    # The same, the whole scene shifted.
+    off = np.array([100.0, -50.0])
+    assert stability_ratio(line0 + off, line2 + off, off, 10.0, 2.0) == pytest.approx(
+        math.sqrt(20.0)
+    )
+    # Identical estimates: 0.
+    assert stability_ratio(line0, line0, c, 10.0, 1.0) == 0.0
+
+
+def test_stability_ratio_nan_cases():
+    c = np.zeros(2)
+    long = np.array([(0, 0), (20, 0)], float)
+    short = np.array([(0, 0), (5, 0)], float)
+    assert math.isnan(stability_ratio(long, short, c, 10.0, 1.0))
+    assert math.isnan(stability_ratio(short, long, c, 10.0, 1.0))
+    # The car did not move (a different estimate, so the ratio would otherwise be infinite).
+    moved = np.array([(0, 1), (20, 1)], float)
+    assert math.isnan(stability_ratio(long, moved, c, 10.0, 0.0))
+    assert math.isnan(stability_ratio(long, moved, c, 10.0, -1.0))
