@@ -107,13 +107,15 @@ def quality_ok(expected: set[int], lane, pose, params) -> bool:
 
 
 def run(backend: str = "cpsat", n_cones: int = 12, poses: int = 60, range_m: float = 20.0,
-        seed: int = 0, time_limit_s: float = 0.4, progress: bool = True) -> list[dict]:
-    """One row per (topology, ratio): inaccurate %, no-lane count, median latency."""
+        seed: int = 0, time_limit_s: float = 0.4, progress: bool = True,
+        **overrides) -> list[dict]:
+    """One row per (topology, ratio): inaccurate %, no-lane count, median latency.
+    ``overrides`` are ``LaneParams`` fields."""
     import time
 
     from tqdm import tqdm
 
-    params = LaneParams(max_cones=n_cones)
+    params = LaneParams(max_cones=n_cones, **overrides)
     rows = []
     tracks = topologies(seed)
     bar = tqdm(total=len(tracks) * len(RATIOS) * poses, desc="rld paper", disable=not progress)
