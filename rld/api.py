@@ -35,18 +35,27 @@ class _RldMethod:
 
     backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy")
 
+    sided = False
+
     def __init__(self, params: LaneParams, backend: str | None = None) -> None:
         from rld.solver import RldModel
 
-        self.model = RldModel(params, backend=backend)
+        self.model = RldModel(params, backend=backend, sided=self.sided)
 
     def solve(self, points, pose, colors=None, time_limit_s=None) -> Lane:
         return self.model.solve(points, pose, time_limit_s=time_limit_s)
 
 
+class _RldSidedMethod(_RldMethod):
+    """RLD with our side-aware formulation (one path per side, width bounded at the cones)."""
+
+    sided = True
+
+
 #: method name -> class(params, backend) with .solve(points, pose, colors, time_limit_s) -> Lane
 METHODS: dict[str, Callable[..., Any]] = {
     "rld": _RldMethod,
+    "rld-sided": _RldSidedMethod,
     "nearest": _NearestMethod,
 }
 #: The method ``solve_lane`` uses when none is named.

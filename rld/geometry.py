@@ -43,7 +43,8 @@ def _flat(*arrays: np.ndarray) -> tuple[tuple[int, ...], list[np.ndarray]]:
             raise ValueError(f"points must have a last axis of length 2, got shape {a.shape}")
     b = np.broadcast_arrays(*arrs)
     shape = b[0].shape[:-1]
-    return shape, [np.ascontiguousarray(x.reshape(-1, 2)) for x in b]
+    # Broadcast views are read-only; numba kernels want plain writeable contiguous arrays.
+    return shape, [np.array(x.reshape(-1, 2), dtype=np.float64, order="C") for x in b]
 
 
 def point_segment_distance(p, a, b) -> np.ndarray:

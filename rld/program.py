@@ -50,6 +50,11 @@ ROW_FAMILIES = (
     "cycle_cut",  # eq. 5, lazily
     "fixed_start",  # optional: the near endpoints are given (cross-check with CLC)
     "angle_cover",  # valid equalities tying f to g, m and a (our strengthening)
+    # The sided formulation (our extension):
+    "two_endpoints",  # per side: sum m = 2
+    "one_side",  # g_L + g_R <= 1
+    "vertex_min_width",  # g_L_i + g_R_j <= 1 for cones closer than w_min
+    "vertex_max_width",  # g_s_i <= sum of g_other_j within w_max
 )
 
 
@@ -77,6 +82,7 @@ class LaneProgram:
     col_lo: np.ndarray
     col_hi: np.ndarray
     family: np.ndarray
+    sided: bool = False
     stats: dict = field(default_factory=dict)
 
     @property
@@ -95,12 +101,14 @@ class LaneProgram:
     def n_rows(self) -> int:
         return int(self.A.shape[0])
 
-    def block(self, name: str) -> slice:
-        """The column slice of block ``a``, ``f``, ``g`` or ``m``."""
+    def block(self, name: str, side: int = 0) -> slice:
+        """The column slice of block ``a``, ``f``, ``g`` or ``m``; of side 0 (left) or 1
+        (right) in the sided formulation."""
         E, T, N = self.n_edges, int(self.triples.shape[0]), self.n_cones
         starts = {"a": 0, "f": E, "g": E + T, "m": E + T + N}
         sizes = {"a": E, "f": T, "g": N, "m": N}
-        return slice(starts[name], starts[name] + sizes[name])
+        base = side * (E + T + 2 * N)
+        return slice(base + starts[name], base + starts[name] + sizes[name])
 
     def objective(self, x: np.ndarray) -> float:
         return float(self.c @ x)
@@ -122,18 +130,22 @@ class LaneProgram:
         self.row_hi = np.concatenate([self.row_hi, hi])
         self.family = np.concatenate([self.family, np.full(len(lo), family, dtype=object)])
 
-    def solution_from_edges(self, chosen: np.ndarray) -> np.ndarray:
-        """The full 0/1 column vector implied by a set of chosen edge indices (for hints and
-        tests): a, then f, g and m derived from them."""
+    def solution_from_edges(self, chosen: np.ndarray, right: np.ndarray | None = None
+                            ) -> np.ndarray:
+        """The full 0/1 column vector implied by chosen edge indices (for hints and tests):
+        a, then f, g and m derived from them. In the sided formulation ``chosen`` are the left
+        edges and ``right`` the right ones."""
         x = np.zeros(self.n_cols)
-        a = np.zeros(self.n_edges)
-        a[np.asarray(chosen, dtype=np.int64)] = 1.0
-        x[self.block("a")] = a
-        if self.triples.shape[0]:
-            x[self.block("f")] = a[self.triples[:, 3]] * a[self.triples[:, 4]]
-        deg = np.bincount(self.edges[a > 0].ravel(), minlength=self.n_cones)
-        x[self.block("g")] = deg > 0
-        x[self.block("m")] = deg == 1
+        sets = [chosen] if not self.sided else [chosen, [] if right is None else right]
+        for side, ids in enumerate(sets):
+            a = np.zeros(self.n_edges)
+            a[np.asarray(ids, dtype=np.int64)] = 1.0
+            x[self.block("a", side)] = a
+            if self.triples.shape[0]:
+                x[self.block("f", side)] = a[self.triples[:, 3]] * a[self.triples[:, 4]]
+            deg = np.bincount(self.edges[a > 0].ravel(), minlength=self.n_cones)
+            x[self.block("g", side)] = deg > 0
+            x[self.block("m", side)] = deg == 1
         return x
 
 
@@ -194,6 +206,7 @@ def build_program(
     start: tuple[int, int] | None = None,
     prune: bool = True,
     strengthen: bool = True,
+    sided: bool = False,
 ) -> LaneProgram:
     """Build the RLD program over ``points`` (N, 2) for the car at ``pose``.
 
@@ -203,7 +216,9 @@ def build_program(
     all edge pairs at a cone as angle variables, the spacing limit and eqs 27-28 as rows); it
     exists to test that pruning is exact. ``strengthen`` adds valid equalities that tie the
     angle variables to the cones (``angle_cover``; they cut no lane graph off, and make the
-    relaxation pay the angle costs).
+    relaxation pay the angle costs). ``sided`` builds our side-aware formulation: a set of
+    columns per side, each side one path starting near the car on its own side, and the lane
+    width bounded at the cones (see docs/formulation.md).
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
     N = points.shape[0]
@@ -233,19 +248,75 @@ def build_program(
         triples, turns, t_cost_kept = all_triples, all_turns, t_cost
         forbidden_pairs = all_triples[:0]
     T = triples.shape[0]
-    a0, f0, g0, m0 = 0, E, E + T, E + T + N
-    n_cols = E + T + 2 * N
-
-    c = np.zeros(n_cols)
-    c[a0:f0] = costs.edge_objective(points, edges, pose, p)
-    c[f0:g0] = p.w_angle * t_cost_kept
-
     near = cons.near_car_mask(points, pose, p.near_radius_m)
     if start is not None:
         near = np.zeros(N, dtype=bool)
         near[list(start)] = True
+    edge_cost = costs.edge_objective(points, edges, pose, p)
+    h = np.flatnonzero(cons.heading_mask(points, edges, pose, p.heading_radius_m,
+                                         p.heading_tolerance_rad))
+    wc = cons.width_conflicts(points, edges, p.min_width_m)
+    cr = cons.crossing_edge_pairs(points, edges) if no_crossing else np.zeros((0, 2), int)
+    # Far cone pairs that may not both be far endpoints (eqs 12-17).
+    far = np.flatnonzero(~near)
+    fi, fj = np.triu_indices(far.size, k=1)
+    fi, fj = far[fi], far[fj]
+    apart = np.hypot(*(points[fi] - points[fj]).T) > p.far_endpoint_max_m
+    fi, fj = fi[apart], fj[apart]
 
+    n_sets = 2 if sided else 1
+    size = E + T + 2 * N
+    n_cols = n_sets * size
+    c = np.zeros(n_cols)
     rows = _Rows()
+    blocks = []
+    for k in range(n_sets):
+        a0 = k * size
+        f0, g0, m0 = a0 + E, a0 + E + T, a0 + E + T + N
+        blocks.append((a0, f0, g0, m0))
+        c[a0:f0] = edge_cost
+        c[f0:g0] = p.w_angle * t_cost_kept
+        _path_rows(rows, edges, triples, forbidden_pairs, N, a0, f0, g0, m0, strengthen)
+    if not sided:
+        a0, f0, g0, m0 = blocks[0]
+        # eq. 3: sum_i (A_i - 2 g_i) = -4, i.e. sum_i m_i = 4 (eq. 4 is the same sum as an
+        # inequality and is implied).
+        rows.add(np.zeros(N), m0 + np.arange(N), np.ones(N), 4.0, 4.0, "four_endpoints")
+        # eq. 11: r^T m = 2
+        nz = np.flatnonzero(near)
+        rows.add(np.zeros(nz.size), m0 + nz, np.ones(nz.size), 2.0, 2.0, "near_endpoints")
+        if start is not None:
+            rows.add(np.arange(2), m0 + np.array(start), np.ones(2), 1.0, 1.0, "fixed_start")
+        # eqs 12-17: the two far endpoints are at most far_endpoint_max_m apart.
+        rows.add_pairs(m0 + fi, m0 + fj, 1.0, "far_endpoints")
+        # eq. 9 / 33: at least two edges near the car along the heading.
+        rows.add(np.zeros(h.size), a0 + h, np.ones(h.size), 2.0, np.inf, "heading")
+        # eqs 6-8: minimum width.
+        rows.add_pairs(a0 + wc[:, 0], a0 + wc[:, 1], 1.0, "width_conflict")
+        rows.add_pairs(a0 + cr[:, 0], a0 + cr[:, 1], 1.0, "crossing")
+    else:
+        _sided_rows(rows, points, pose, p, blocks, near, start, h, wc, cr, fi, fj)
+    A, lo, hi, fam = rows.build(n_cols)
+    col_lo = np.zeros(n_cols)
+    col_hi = np.ones(n_cols)
+    if not prune:
+        # The dense model states the spacing limit, eq. 27 and eq. 28 as constraints.
+        for a0, f0, g0, _ in blocks:
+            col_hi[a0:f0][edge_bad] = 0.0
+            col_hi[f0:g0][turn_bad] = 0.0
+    return LaneProgram(
+        points=points, pose=pose, params=p, edges=edges, triples=triples, turns=turns,
+        near=near, c=c, A=A, row_lo=lo, row_hi=hi, col_lo=col_lo, col_hi=col_hi, family=fam,
+        sided=sided,
+        stats={"n_cols": n_cols, "n_rows": int(A.shape[0]), "n_edges": E, "n_angles": T},
+    )
+
+
+def _path_rows(rows: _Rows, edges, triples, forbidden_pairs, N, a0, f0, g0, m0,
+               strengthen: bool) -> None:
+    """The rows that make one set of edge columns a set of paths with consistent inlier,
+    endpoint and angle columns (eqs 1, 2, 10, 22, 23, 28 and the angle-cover rows)."""
+    E, T = edges.shape[0], triples.shape[0]
     # Incidence of edges on cones: A_i = sum of a_e over e containing i.
     inc_r = edges.ravel()  # cone of each (edge, end)
     inc_c = np.repeat(np.arange(E), 2) + a0
@@ -261,82 +332,88 @@ def build_program(
              np.concatenate([m0 + np.arange(N), g0 + np.arange(N), inc_c]),
              np.concatenate([np.ones(N), -2 * np.ones(N), np.ones(2 * E)]),
              np.zeros(N), np.zeros(N), "endpoint_def")
-    # eq. 3: sum_i (A_i - 2 g_i) = -4, i.e. sum_i m_i = 4 (eq. 4 is the same sum as an
-    # inequality and is implied).
-    rows.add(np.zeros(N), m0 + np.arange(N), np.ones(N), 4.0, 4.0, "four_endpoints")
-    # eq. 11: r^T m = 2
-    nz = np.flatnonzero(near)
-    rows.add(np.zeros(nz.size), m0 + nz, np.ones(nz.size), 2.0, 2.0, "near_endpoints")
-    if start is not None:
-        rows.add(np.arange(2), m0 + np.array(start), np.ones(2), 1.0, 1.0, "fixed_start")
-    # eqs 12-17: the two far endpoints are at most far_endpoint_max_m apart.
-    far = np.flatnonzero(~near)
-    if far.size >= 2:
-        fi, fj = np.triu_indices(far.size, k=1)
-        fi, fj = far[fi], far[fj]
-        apart = np.hypot(*(points[fi] - points[fj]).T) > p.far_endpoint_max_m
-        rows.add_pairs(m0 + fi[apart], m0 + fj[apart], 1.0, "far_endpoints")
-    # eq. 9 / 33: at least two edges near the car along the heading.
-    h = np.flatnonzero(cons.heading_mask(points, edges, pose, p.heading_radius_m,
-                                         p.heading_tolerance_rad))
-    rows.add(np.zeros(h.size), a0 + h, np.ones(h.size), 2.0, np.inf, "heading")
-    # eqs 6-8: minimum width.
-    wc = cons.width_conflicts(points, edges, p.min_width_m)
-    rows.add_pairs(a0 + wc[:, 0], a0 + wc[:, 1], 1.0, "width_conflict")
-    if no_crossing:
-        cr = cons.crossing_edge_pairs(points, edges)
-        rows.add_pairs(a0 + cr[:, 0], a0 + cr[:, 1], 1.0, "crossing")
     # eq. 28 on pruned angle variables: the two edges cannot both be chosen.
     rows.add_pairs(a0 + forbidden_pairs[:, 3], a0 + forbidden_pairs[:, 4], 1.0, "turn_limit")
+    if T == 0:
+        return
     # eqs 22-23: f = a_ij * a_jk.
-    if T:
-        k = np.arange(T)
-        r3 = np.repeat(k, 3)
-        cols = np.column_stack([f0 + k, a0 + triples[:, 3], a0 + triples[:, 4]]).ravel()
-        rows.add(r3, cols, np.tile([2.0, -1.0, -1.0], T), -np.inf, np.zeros(T), "angle_link")
-        rows.add(r3, cols, np.tile([1.0, -1.0, -1.0], T), -np.ones(T), np.inf, "angle_link")
-    if T and strengthen:
-        # Valid equalities that tie f to the cones (our addition; the LP relaxation of eqs
-        # 22-23 alone lets f = 0 with both edges at 1/2, so the angle costs vanish from the
-        # bound). An interior cone (g = 1, m = 0) has exactly one chosen pair of edges, an
-        # endpoint or unused cone none: sum_{t at j} f_t = g_j - m_j. A chosen edge e at a
-        # cone j that is not an endpoint is in exactly one chosen pair there, and never in two:
-        # a_e - m_j <= sum_{t at j, e in t} f_t <= a_e.
-        centre = triples[:, 1]
-        rows.add(np.concatenate([centre, np.arange(N), np.arange(N)]),
-                 np.concatenate([f0 + np.arange(T), g0 + np.arange(N), m0 + np.arange(N)]),
-                 np.concatenate([np.ones(T), -np.ones(N), np.ones(N)]),
-                 np.zeros(N), np.zeros(N), "angle_cover")
-        # (cone, edge) incidences and the triples that contain each.
-        inc_edge = np.concatenate([triples[:, 3], triples[:, 4]])
-        inc_cone = np.concatenate([centre, centre])
-        inc_f = np.concatenate([np.arange(T), np.arange(T)])
-        pairs, row_of = np.unique(np.column_stack([inc_cone, inc_edge]), axis=0,
-                                  return_inverse=True)
-        row_of = row_of.ravel()
-        K = pairs.shape[0]
-        kk = np.arange(K)
-        # sum f - a_e <= 0
-        rows.add(np.concatenate([row_of, kk]), np.concatenate([f0 + inc_f, a0 + pairs[:, 1]]),
-                 np.concatenate([np.ones(row_of.size), -np.ones(K)]), -np.inf, np.zeros(K),
-                 "angle_cover")
-        # sum f - a_e + m_j >= 0
-        rows.add(np.concatenate([row_of, kk, kk]),
-                 np.concatenate([f0 + inc_f, a0 + pairs[:, 1], m0 + pairs[:, 0]]),
-                 np.concatenate([np.ones(row_of.size), -np.ones(K), np.ones(K)]),
-                 np.zeros(K), np.inf, "angle_cover")
-    A, lo, hi, fam = rows.build(n_cols)
-    col_lo = np.zeros(n_cols)
-    col_hi = np.ones(n_cols)
-    if not prune:
-        # The dense model states the spacing limit, eq. 27 and eq. 28 as constraints.
-        col_hi[a0:f0][edge_bad] = 0.0
-        col_hi[f0:g0][turn_bad] = 0.0
-    return LaneProgram(
-        points=points, pose=pose, params=p, edges=edges, triples=triples, turns=turns,
-        near=near, c=c, A=A, row_lo=lo, row_hi=hi, col_lo=col_lo, col_hi=col_hi, family=fam,
-        stats={"n_cols": n_cols, "n_rows": int(A.shape[0]), "n_edges": E, "n_angles": T},
-    )
+    k = np.arange(T)
+    r3 = np.repeat(k, 3)
+    cols = np.column_stack([f0 + k, a0 + triples[:, 3], a0 + triples[:, 4]]).ravel()
+    rows.add(r3, cols, np.tile([2.0, -1.0, -1.0], T), -np.inf, np.zeros(T), "angle_link")
+    rows.add(r3, cols, np.tile([1.0, -1.0, -1.0], T), -np.ones(T), np.inf, "angle_link")
+    if not strengthen:
+        return
+    # Valid equalities that tie f to the cones (our addition; the LP relaxation of eqs 22-23
+    # alone lets f = 0 with both edges at 1/2, so the angle costs vanish from the bound). An
+    # interior cone (g = 1, m = 0) has exactly one chosen pair of edges, an endpoint or unused
+    # cone none: sum_{t at j} f_t = g_j - m_j. A chosen edge e at a cone j that is not an
+    # endpoint is in exactly one chosen pair there, and never in two:
+    # a_e - m_j <= sum_{t at j, e in t} f_t <= a_e.
+    centre = triples[:, 1]
+    rows.add(np.concatenate([centre, np.arange(N), np.arange(N)]),
+             np.concatenate([f0 + np.arange(T), g0 + np.arange(N), m0 + np.arange(N)]),
+             np.concatenate([np.ones(T), -np.ones(N), np.ones(N)]),
+             np.zeros(N), np.zeros(N), "angle_cover")
+    inc_edge = np.concatenate([triples[:, 3], triples[:, 4]])
+    inc_cone = np.concatenate([centre, centre])
+    inc_f = np.concatenate([np.arange(T), np.arange(T)])
+    pairs, row_of = np.unique(np.column_stack([inc_cone, inc_edge]), axis=0,
+                              return_inverse=True)
+    row_of = row_of.ravel()
+    K = pairs.shape[0]
+    kk = np.arange(K)
+    rows.add(np.concatenate([row_of, kk]), np.concatenate([f0 + inc_f, a0 + pairs[:, 1]]),
+             np.concatenate([np.ones(row_of.size), -np.ones(K)]), -np.inf, np.zeros(K),
+             "angle_cover")
+    rows.add(np.concatenate([row_of, kk, kk]),
+             np.concatenate([f0 + inc_f, a0 + pairs[:, 1], m0 + pairs[:, 0]]),
+             np.concatenate([np.ones(row_of.size), -np.ones(K), np.ones(K)]),
+             np.zeros(K), np.inf, "angle_cover")
+
+
+def _sided_rows(rows: _Rows, points, pose, p, blocks, near, start, h, wc, cr, fi, fj) -> None:
+    """The side-aware formulation (our extension): one path per side, each starting near the
+    car on its own side, the lane width bounded at the cones. See docs/formulation.md."""
+    N = points.shape[0]
+    (aL, _, gL, mL), (aR, _, gR, mR) = blocks
+    lateral = pose.to_local(points)[:, 1]
+    if start is not None:
+        near_sides = [np.array([start[0]]), np.array([start[1]])]
+    else:
+        near_sides = [np.flatnonzero(near & (lateral > 0)), np.flatnonzero(near & (lateral < 0))]
+    for (a0, _, _, m0), nz in zip(blocks, near_sides, strict=True):
+        # Each side is one path: two endpoints (eq. 3 per side), one of them near the car on
+        # its own side (eq. 11 per side), with an edge along the heading near the car (eq. 9).
+        rows.add(np.zeros(N), m0 + np.arange(N), np.ones(N), 2.0, 2.0, "two_endpoints")
+        rows.add(np.zeros(nz.size), m0 + nz, np.ones(nz.size), 1.0, 1.0, "near_endpoints")
+        rows.add(np.zeros(h.size), a0 + h, np.ones(h.size), 1.0, np.inf, "heading")
+    # A cone belongs to one side at most.
+    rows.add_pairs(gL + np.arange(N), gR + np.arange(N), 1.0, "one_side")
+    # eqs 12-17: the far endpoints (one per side) at most d_max apart.
+    rows.add_pairs(mL + fi, mR + fj, 1.0, "far_endpoints")
+    rows.add_pairs(mR + fi, mL + fj, 1.0, "far_endpoints")
+    # eqs 6-8 across the sides.
+    rows.add_pairs(aL + wc[:, 0], aR + wc[:, 1], 1.0, "width_conflict")
+    rows.add_pairs(aR + wc[:, 0], aL + wc[:, 1], 1.0, "width_conflict")
+    # No crossing, whatever the sides: the two edges' four columns sum to at most 1.
+    if cr.shape[0]:
+        k = cr.shape[0]
+        cols = np.column_stack([aL + cr[:, 0], aR + cr[:, 0], aL + cr[:, 1], aR + cr[:, 1]])
+        rows.add(np.repeat(np.arange(k), 4), cols.ravel(), np.ones(4 * k), -np.inf,
+                 np.ones(k), "crossing")
+    # The width at the cones: a left and a right cone closer than w_min cannot both be used;
+    # every used cone has a cone of the other side within w_max.
+    d = np.hypot(*(points[:, None, :] - points[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(d, np.inf)
+    ci, cj = np.nonzero(d < p.min_width_m)
+    rows.add_pairs(gL + ci, gR + cj, 1.0, "vertex_min_width")
+    wi, wj = np.nonzero(d <= p.max_width_m)
+    for g_self, g_other in ((gL, gR), (gR, gL)):
+        rows.add(np.concatenate([np.arange(N), wi]),
+                 np.concatenate([g_self + np.arange(N), g_other + wj]),
+                 np.concatenate([np.ones(N), -np.ones(wi.size)]), -np.inf, np.zeros(N),
+                 "vertex_max_width")
 
 
 def _components(n: int, edges: np.ndarray) -> list[list[int]]:
@@ -368,21 +445,25 @@ def cycle_cut(program: LaneProgram, cones: list[int]) -> None:
     S = np.zeros(program.n_cones, dtype=bool)
     S[cones] = True
     inside = np.flatnonzero(S[program.edges[:, 0]] & S[program.edges[:, 1]])
+    # In the sided formulation both sides' edges inside S count: two paths have even fewer.
+    cols = np.concatenate([program.block("a", k).start + inside
+                           for k in range(2 if program.sided else 1)])
     A = sp.csr_matrix(
-        (np.ones(inside.size), (np.zeros(inside.size, dtype=np.int64), inside)),
+        (np.ones(cols.size), (np.zeros(cols.size, dtype=np.int64), cols)),
         shape=(1, program.n_cols),
     )
     program.add_rows(A, np.array([-np.inf]), np.array([len(cones) - 1.0]), "cycle_cut")
 
 
 def extract_paths(
-    program: LaneProgram, x: np.ndarray
+    program: LaneProgram, x: np.ndarray, side: int = 0
 ) -> tuple[list[list[int]], list[list[int]]]:
-    """Split a solution into its simple paths and its cycles (lists of cones).
+    """Split a solution (the edges of ``side`` in the sided formulation) into its simple paths
+    and its cycles (lists of cones).
 
     Each path is ordered from its end nearer the car (an end in the near mask first).
     """
-    chosen = program.edges[x[program.block("a")] > 0.5]
+    chosen = program.edges[x[program.block("a", side)] > 0.5]
     n = program.n_cones
     deg = np.bincount(chosen.ravel(), minlength=n)
     adj: list[list[int]] = [[] for _ in range(n)]

@@ -32,6 +32,16 @@ DEFAULT_TIME_LIMIT_S = 0.4  # the paper's success limit (section IV-A)
 MAX_CYCLE_ROUNDS = 25
 
 
+def _split(program, x) -> tuple[list[list[int]], list[list[int]]]:
+    """Paths and cycles of a solution. Sided: exactly one path per side, [left, right], or
+    whatever is there when that fails (the caller reports it)."""
+    if not program.sided:
+        return extract_paths(program, x)
+    lp, lc = extract_paths(program, x, 0)
+    rp, rc = extract_paths(program, x, 1)
+    return lp + rp, lc + rc
+
+
 def cone_window(points: np.ndarray, pose: Pose, params: LaneParams) -> tuple[np.ndarray, float]:
     """Indices of the cones RLD takes (see the module docstring) and the horizon: the distance
     from the car to the farthest of them, metres."""
@@ -48,7 +58,8 @@ def cone_window(points: np.ndarray, pose: Pose, params: LaneParams) -> tuple[np.
 
 class RldModel:
     """RLD with a backend (``cpsat``, ``highs``, ``cvxpy`` or ``cvxpy:SOLVER``) and the previous
-    solution for warm starts. ``no_crossing`` adds the no-crossing rows (section V)."""
+    solution for warm starts. ``no_crossing`` adds the no-crossing rows (section V); ``sided``
+    uses the side-aware formulation (``rld.program.build_program``)."""
 
     def __init__(
         self,
@@ -56,11 +67,13 @@ class RldModel:
         backend: str | None = None,
         warm_start: bool = True,
         no_crossing: bool = True,
+        sided: bool = False,
     ) -> None:
         self.params = params
         self.backend = make_backend(backend)
         self.warm_start = warm_start
         self.no_crossing = no_crossing
+        self.sided = sided
         self._previous: list[np.ndarray] | None = None  # boundary positions of the last lane
 
     def reset(self) -> None:
@@ -71,19 +84,23 @@ class RldModel:
             return None, 0
         tree = cKDTree(program.points)
         eid = {(int(i), int(j)): k for k, (i, j) in enumerate(program.edges)}
-        chosen = []
+        per_side: list[list[int]] = []
         for xy in self._previous:
-            if len(xy) < 2:
-                continue
-            dist, idx = tree.query(xy, distance_upper_bound=MATCH_TOLERANCE_M)
-            for k in range(len(xy) - 1):
-                if np.isfinite(dist[k]) and np.isfinite(dist[k + 1]):
-                    key = (min(idx[k], idx[k + 1]), max(idx[k], idx[k + 1]))
-                    if key in eid:
-                        chosen.append(eid[key])
-        if not chosen:
+            chosen = []
+            if len(xy) >= 2:
+                dist, idx = tree.query(xy, distance_upper_bound=MATCH_TOLERANCE_M)
+                for k in range(len(xy) - 1):
+                    if np.isfinite(dist[k]) and np.isfinite(dist[k + 1]):
+                        key = (min(idx[k], idx[k + 1]), max(idx[k], idx[k + 1]))
+                        if key in eid:
+                            chosen.append(eid[key])
+            per_side.append(chosen)
+        n = sum(len(c) for c in per_side)
+        if n == 0:
             return None, 0
-        return program.solution_from_edges(np.array(chosen)), len(chosen)
+        if program.sided:
+            return program.solution_from_edges(per_side[0], per_side[1]), n
+        return program.solution_from_edges(np.array(per_side[0] + per_side[1])), n
 
     def solve(
         self,
@@ -116,7 +133,8 @@ class RldModel:
         if window.size < 4:
             return Lane.not_found(points, f"only {window.size} cones ahead of the car", stats=stats)
         program = build_program(sub, pose, self.params, no_crossing=self.no_crossing,
-                                start=local_start, strengthen=self.backend.strengthen)
+                                start=local_start, strengthen=self.backend.strengthen,
+                                sided=self.sided)
         stats.update(program.stats)
         stats["build_time_s"] = time.perf_counter() - t0
         if program.near.sum() < 2:
@@ -136,7 +154,7 @@ class RldModel:
             result = self.backend.solve(program, max(remaining, 1e-3), hint)
             if result.x is None:
                 break
-            paths, cycles = extract_paths(program, result.x)
+            paths, cycles = _split(program, result.x)
             if not cycles:
                 break
             stats["cycle_rounds"] += 1
@@ -155,7 +173,7 @@ class RldModel:
                 "timeout": f"no solution within the time limit of {budget:.3g} s",
             }.get(result.status, f"solver error: {result.message}")
             return Lane.not_found(points, msg, status=status, stats=stats)
-        paths, cycles = extract_paths(program, result.x)
+        paths, cycles = _split(program, result.x)
         status = LaneStatus.OPTIMAL if result.status == "optimal" else LaneStatus.FEASIBLE
         message = ""
         if cycles:
@@ -167,14 +185,22 @@ class RldModel:
         stats["gap"] = result.gap
         if len(paths) != 2:
             return Lane.not_found(points, f"solution has {len(paths)} paths", stats=stats)
-        # Left is the path whose first cone lies further to the car's left.
-        y0 = [pose.to_local(sub[[p[0]]])[0, 1] for p in paths]
-        left, right = (paths[0], paths[1]) if y0[0] >= y0[1] else (paths[1], paths[0])
+        stats["formulation"] = "sided" if program.sided else "paper"
+        if program.sided:
+            left, right = paths
+        else:
+            # Left is the path whose first cone lies further to the car's left.
+            y0 = [pose.to_local(sub[[p[0]]])[0, 1] for p in paths]
+            left, right = (paths[0], paths[1]) if y0[0] >= y0[1] else (paths[1], paths[0])
         self._previous = [sub[left], sub[right]]
         eid = {(int(i), int(j)): k for k, (i, j) in enumerate(program.edges)}
-        used = [eid[(min(a, b), max(a, b))] for p in (left, right)
-                for a, b in zip(p[:-1], p[1:], strict=True)]
-        lane_cost = program.objective(program.solution_from_edges(np.array(used, dtype=int)))
+        used = [[eid[(min(a, b), max(a, b))] for a, b in zip(p[:-1], p[1:], strict=True)]
+                for p in (left, right)]
+        if program.sided:
+            x_lane = program.solution_from_edges(used[0], used[1])
+        else:
+            x_lane = program.solution_from_edges(np.array(used[0] + used[1], dtype=int))
+        lane_cost = program.objective(x_lane)
         return Lane(
             cones=points,
             left=window[left],

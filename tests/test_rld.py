@@ -71,9 +71,10 @@ def simple_paths(n, edges):
     return out
 
 
-def lane_graph_ok(points, pose, p, paths, no_crossing=True):
+def lane_graph_ok(points, pose, p, paths, no_crossing=True, sided=False):
     """Every constraint of the program, checked on the lane graph directly (not through the
-    program's rows)."""
+    program's rows). ``sided``: only the per-path rules, the edge-pair rules across the two
+    paths and no crossing anywhere (``sided_ok`` adds the rest)."""
     edges = [tuple(sorted(e)) for path in paths for e in zip(path[:-1], path[1:], strict=True)]
     e_arr = np.array(edges)
     lengths = C.edge_lengths(points, e_arr)
@@ -86,6 +87,19 @@ def lane_graph_ok(points, pose, p, paths, no_crossing=True):
         turns = polyline_turn_angles(points[list(path)])
         if np.any(np.abs(turns) > p.max_turn_angle_rad):
             return False
+    if sided:
+        side_of = {c: k for k, path in enumerate(paths) for c in path}
+        for a, b in itertools.combinations(range(len(edges)), 2):
+            if set(edges[a]) & set(edges[b]):
+                continue
+            pa, pb = points[list(edges[a])], points[list(edges[b])]
+            if no_crossing and segments_intersect(pa[0], pa[1], pb[0], pb[1]):
+                return False
+            if side_of[edges[a][0]] != side_of[edges[b][0]]:
+                d, end = segment_distance_end(pa[0], pa[1], pb[0], pb[1])
+                if d < p.min_width_m and not end:
+                    return False
+        return True
     near = C.near_car_mask(points, pose, p.near_radius_m)
     ends = [path[0] for path in paths] + [path[-1] for path in paths]
     if sum(near[e] for e in ends) != 2:
@@ -108,33 +122,64 @@ def lane_graph_ok(points, pose, p, paths, no_crossing=True):
     return True
 
 
-def brute_force_optimum(points, pose, p):
+def sided_ok(points, pose, p, L, R):
+    """The side-aware formulation's constraints, on an ordered pair (left L, right R)."""
+    if not lane_graph_ok(points, pose, p, (L, R), sided=True):
+        return False
+    near = C.near_car_mask(points, pose, p.near_radius_m)
+    y = pose.to_local(points)[:, 1]
+    if sum(near[e] and y[e] > 0 for e in (L[0], L[-1])) != 1:
+        return False
+    if sum(near[e] and y[e] < 0 for e in (R[0], R[-1])) != 1:
+        return False
+    for i in (L[0], L[-1]):
+        for j in (R[0], R[-1]):
+            if not near[i] and not near[j] and math.dist(points[i], points[j]) > \
+                    p.far_endpoint_max_m:
+                return False
+    e_arr = lambda P: np.array([sorted(e) for e in zip(P[:-1], P[1:], strict=True)])  # noqa: E731
+    for P in (L, R):
+        h = C.heading_mask(points, e_arr(P), pose, p.heading_radius_m, p.heading_tolerance_rad)
+        if not h.any():
+            return False
+    d = lambda i, j: math.dist(points[i], points[j])  # noqa: E731
+    if any(d(i, j) < p.min_width_m for i in L for j in R):
+        return False
+    if any(min(d(i, j) for j in R) > p.max_width_m for i in L):
+        return False
+    return not any(min(d(i, j) for j in L) > p.max_width_m for i in R)
+
+
+def brute_force_optimum(points, pose, p, sided=False):
     cand = C.candidate_edges(points, p.max_cone_spacing_m)
     paths = simple_paths(points.shape[0], cand)
     best = math.inf
-    for P, Q in itertools.combinations(paths, 2):
+    pairs = itertools.permutations(paths, 2) if sided else itertools.combinations(paths, 2)
+    for P, Q in pairs:
         if set(P) & set(Q):
             continue
-        if lane_graph_ok(points, pose, p, (P, Q)):
+        ok = sided_ok(points, pose, p, P, Q) if sided else lane_graph_ok(points, pose, p, (P, Q))
+        if ok:
             cost = costs.lane_cost(points, P, Q, pose, p)
             best = min(best, cost)
     return best
 
 
-def solve_program(points, pose, p, backend="highs", prune=True):
+def solve_program(points, pose, p, backend="highs", prune=True, sided=False):
     """Optimal objective of the program with lazy cycle cuts (inf when infeasible)."""
     from rld.program import cycle_cut
 
     be = make_backend(backend)
     # Each backend gets the program it gets in use (with or without the angle-cover rows).
-    prog = build_program(points, pose, p, prune=prune, strengthen=be.strengthen)
+    prog = build_program(points, pose, p, prune=prune, strengthen=be.strengthen, sided=sided)
     for _ in range(30):
         res = be.solve(prog, 20.0)
         if res.x is None:
             assert res.status == "infeasible", res
             return math.inf, None
         assert res.status == "optimal"
-        paths, cycles = extract_paths(prog, res.x)
+        cycles = [c for side in range(2 if sided else 1)
+                  for c in extract_paths(prog, res.x, side)[1]]
         if not cycles:
             return res.objective, (prog, res.x)
         for comp in cycles:
@@ -142,12 +187,13 @@ def solve_program(points, pose, p, backend="highs", prune=True):
     raise AssertionError("too many cycle rounds")
 
 
+@pytest.mark.parametrize("sided", [False, True], ids=["paper", "sided"])
 @pytest.mark.parametrize("seed", range(60))
-def test_program_optimum_equals_brute_force(seed):
+def test_program_optimum_equals_brute_force(seed, sided):
     n = 5 + seed % 3  # 5, 6, 7 cones
     points, pose = instance(seed, n)
-    expect = brute_force_optimum(points, pose, PARAMS)
-    got, _ = solve_program(points, pose, PARAMS)
+    expect = brute_force_optimum(points, pose, PARAMS, sided=sided)
+    got, _ = solve_program(points, pose, PARAMS, sided=sided)
     if math.isinf(expect):
         assert math.isinf(got)
     else:
@@ -165,9 +211,10 @@ def test_brute_force_instances_are_not_trivial():
 @pytest.mark.parametrize("seed", range(100))
 def test_pruning_is_exact(seed):
     n = 6 + seed % 5  # 6..10 cones
+    sided = seed % 2 == 1
     points, pose = instance(1000 + seed, n, fp=seed % 4)
-    dense, _ = solve_program(points, pose, PARAMS, prune=False)
-    pruned, _ = solve_program(points, pose, PARAMS, prune=True)
+    dense, _ = solve_program(points, pose, PARAMS, prune=False, sided=sided)
+    pruned, _ = solve_program(points, pose, PARAMS, prune=True, sided=sided)
     assert dense == pytest.approx(pruned, abs=1e-6) or (math.isinf(dense) and math.isinf(pruned))
 
 
@@ -175,7 +222,7 @@ def test_pruning_is_exact(seed):
 def test_backends_agree(seed):
     n = 8 + seed % 7  # 8..14 cones
     points, pose = instance(2000 + seed, n, fp=seed % 5)
-    values = [solve_program(points, pose, PARAMS, backend=b)[0]
+    values = [solve_program(points, pose, PARAMS, backend=b, sided=seed % 2 == 1)[0]
               for b in ("cpsat", "highs", "cvxpy")]
     if math.isinf(values[0]):
         assert all(math.isinf(v) for v in values)
