@@ -26,8 +26,11 @@ class _NearestMethod:
     def __init__(self, params: LaneParams, backend: str | None = None) -> None:
         self.params = params
 
-    def solve(self, points, pose, colors=None, time_limit_s=None) -> Lane:
-        return nearest_chain(points, pose, self.params)
+    def solve(self, points, pose, colors=None, time_limit_s=None, confidence=None) -> Lane:
+        lane = nearest_chain(points, pose, self.params)
+        if colors is not None or confidence is not None:
+            lane.stats["note"] = "the nearest-neighbour chain ignores colors and confidence"
+        return lane
 
 
 class _RldMethod:
@@ -42,8 +45,9 @@ class _RldMethod:
 
         self.model = RldModel(params, backend=backend, sided=self.sided)
 
-    def solve(self, points, pose, colors=None, time_limit_s=None) -> Lane:
-        return self.model.solve(points, pose, time_limit_s=time_limit_s)
+    def solve(self, points, pose, colors=None, time_limit_s=None, confidence=None) -> Lane:
+        return self.model.solve(points, pose, time_limit_s=time_limit_s, colors=colors,
+                                confidence=confidence)
 
 
 class _RldSidedMethod(_RldMethod):
@@ -71,6 +75,20 @@ def _check_method(method: str) -> str:
             " (clc is not implemented yet)"
         )
     return method
+
+
+def _check_confidence(confidence: Any, n: int) -> np.ndarray | None:
+    if confidence is None:
+        return None
+    try:
+        arr = np.asarray(confidence, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"confidence must be numbers in [0, 1]: {exc}") from exc
+    if arr.shape != (n,):
+        raise ValueError(f"confidence must have one value per cone ({n}), got {arr.shape}")
+    if not np.all(np.isfinite(arr)) or arr.min() < 0 or arr.max() > 1:
+        raise ValueError("confidence must be finite numbers in [0, 1]")
+    return arr
 
 
 def _check_colors(colors: Any, n: int) -> np.ndarray | None:
@@ -119,17 +137,20 @@ class LaneSolver:
         pose: Pose | Sequence[float],
         colors: Any = None,
         time_limit_s: float | None = None,
+        confidence: Any = None,
     ) -> Lane:
         """Find the lane in ``cones`` ((N, 2) metres) ahead of ``pose`` ((x, y, yaw) or a
         ``Pose``). Raises ``ValueError`` on invalid input; returns a ``Lane`` with ``ok ==
         False`` when the input is valid but holds no lane."""
         points = as_cones(cones)
         car = as_pose(pose)
-        _check_colors(colors, points.shape[0])
+        labels = _check_colors(colors, points.shape[0])
+        conf = _check_confidence(confidence, points.shape[0])
         if time_limit_s is not None and not (time_limit_s > 0):
             raise ValueError(f"time_limit_s must be positive, got {time_limit_s}")
         t0 = time.perf_counter()
-        lane = self._impl.solve(points, car, colors=colors, time_limit_s=time_limit_s)
+        lane = self._impl.solve(points, car, colors=labels, time_limit_s=time_limit_s,
+                                confidence=conf)
         elapsed = time.perf_counter() - t0
         lane.stats.setdefault("backend", self.backend)
         lane.stats.update(method=self.method, solve_time_s=elapsed, n_cones=int(points.shape[0]))
@@ -146,15 +167,18 @@ def solve_lane(
     backend: str | None = None,
     colors: Any = None,
     time_limit_s: float | None = None,
+    confidence: Any = None,
 ) -> Lane:
     """Find the driving lane in ``cones`` ahead of the car at ``pose`` (stateless).
 
     ``cones``: array-like (N, 2), metres, in any order, false positives included.
     ``pose``: ``(x, y, yaw)`` (metres, radians) or a ``Pose``.
     ``method``: a name in ``METHODS``. ``params``: a ``LaneParams``. ``backend``: RLD solver
-    backend. ``colors``: optional per-cone labels (``unknown``/``left``/``right`` or 0/1/2).
-    ``time_limit_s``: the solve's time budget.
+    backend. ``colors``: optional per-cone labels (``unknown``/``left``/``right`` or 0/1/2),
+    a cost for RLD (``LaneParams.w_color``). ``confidence``: optional per-cone detection
+    confidence in [0, 1], a cost for RLD (``LaneParams.w_confidence``). The nearest-neighbour
+    baseline ignores both. ``time_limit_s``: the solve's time budget (RLD default 0.4 s).
     """
     return LaneSolver(method=method, params=params, backend=backend).solve(
-        cones, pose, colors=colors, time_limit_s=time_limit_s
+        cones, pose, colors=colors, time_limit_s=time_limit_s, confidence=confidence
     )

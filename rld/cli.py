@@ -137,6 +137,8 @@ def bench() -> None:
 
 
 @bench.command("rld")
+@click.option("--method", type=click.Choice(["rld", "rld-sided"]), default="rld",
+              show_default=True)
 @click.option("--backends", default="cpsat,highs,cvxpy", show_default=True)
 @click.option("--sizes", default="12,16,20,30,40", show_default=True, help="Cones per window.")
 @click.option("--tracks", "n_tracks", default=4, show_default=True, help="Generated tracks.")
@@ -144,13 +146,13 @@ def bench() -> None:
 @click.option("--time-limit", "time_limit_s", default=1.0, show_default=True,
               help="Budget per call, seconds.")
 @click.option("--out", default=None, help="Also write the Markdown table to this file.")
-def bench_rld(backends: str, sizes: str, n_tracks: int, stride: int, time_limit_s: float,
-              out: str | None) -> None:
+def bench_rld(method: str, backends: str, sizes: str, n_tracks: int, stride: int,
+              time_limit_s: float, out: str | None) -> None:
     """RLD latency per backend and window size, cold and warm-started."""
     mod = _benchmark_module("bench_rld")
     rows = mod.run(sizes=[int(v) for v in sizes.split(",")],
                    backends=[b.strip() for b in backends.split(",")],
-                   n_tracks=n_tracks, stride=stride, time_limit_s=time_limit_s)
+                   n_tracks=n_tracks, stride=stride, time_limit_s=time_limit_s, method=method)
     table = mod.to_markdown(rows, time_limit_s)
     click.echo(f"machine: {mod.machine()}")
     click.echo(table)

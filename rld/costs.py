@@ -19,6 +19,8 @@ __all__ = [
     "high_cost_mask",
     "edge_objective",
     "lane_cost",
+    "color_cost",
+    "confidence_cost",
 ]
 
 
@@ -61,14 +63,34 @@ def high_cost_mask(costs: np.ndarray, critical: float) -> np.ndarray:
 
 
 def edge_objective(
-    points: np.ndarray, edges: np.ndarray, pose: Pose, params: LaneParams
+    points: np.ndarray,
+    edges: np.ndarray,
+    pose: Pose,
+    params: LaneParams,
+    colors: np.ndarray | None = None,
 ) -> np.ndarray:
     """Coefficient of every edge variable in RLD's objective (eq. 29):
-    ``w_s s_ij + w_p p_ij - w_b``."""
+    ``w_s s_ij + w_p p_ij - w_b``, plus ``w_color`` times the colour cost when ``colors`` are
+    given."""
     lengths = np.hypot(*(points[edges[:, 1]] - points[edges[:, 0]]).T)
     s = spacing_cost(lengths, params.expected_spacing_m, params.spacing_tolerance_m)
     p = heading_cost(points, edges, pose, params.heading_min_distance_m)
-    return params.w_spacing * s + params.w_heading * p - params.w_benefit
+    out = params.w_spacing * s + params.w_heading * p - params.w_benefit
+    if colors is not None:
+        out = out + params.w_color * color_cost(colors, edges)
+    return out
+
+
+def color_cost(colors: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """1 for an edge joining a cone labelled left (1) to one labelled right (2), else 0
+    (unknown, 0, never costs). Our extension (RLD section V)."""
+    a, b = colors[edges[:, 0]], colors[edges[:, 1]]
+    return ((a > 0) & (b > 0) & (a != b)).astype(np.float64)
+
+
+def confidence_cost(confidence: np.ndarray) -> np.ndarray:
+    """1 - confidence per cone: what using a doubtful detection costs. Our extension."""
+    return 1.0 - np.asarray(confidence, dtype=np.float64)
 
 
 def lane_cost(
@@ -78,17 +100,27 @@ def lane_cost(
     pose: Pose,
     params: LaneParams,
     closed: bool = False,
+    colors: np.ndarray | None = None,
+    confidence: np.ndarray | None = None,
+    sided: bool = False,
 ) -> float:
     """RLD's objective (eq. 29) of the lane graph made by two index sequences: the sum of the
-    edge coefficients of its edges plus ``w_t`` times the angle cost at every interior cone."""
+    edge coefficients of its edges plus ``w_t`` times the angle cost at every interior cone,
+    plus the colour and confidence costs when given (``sided`` adds the per-cone colour cost
+    of the side-aware formulation)."""
     total = 0.0
-    for idx in (left, right):
+    for side, idx in enumerate((left, right)):
         idx = np.asarray(idx, dtype=np.int64)
+        if confidence is not None and idx.size >= 2:
+            total += params.w_confidence * float(confidence_cost(confidence[idx]).sum())
+        if sided and colors is not None and idx.size >= 2:
+            wrong = 2 if side == 0 else 1
+            total += params.w_color * float((colors[idx] == wrong).sum())
         if idx.size < 2:
             continue
         seq = np.concatenate([idx, idx[:1]]) if closed else idx
         edges = np.column_stack([seq[:-1], seq[1:]])
-        total += float(edge_objective(points, edges, pose, params).sum())
+        total += float(edge_objective(points, edges, pose, params, colors).sum())
         turns = geo.polyline_turn_angles(points[idx], closed=closed)
         total += params.w_angle * float(angle_cost(turns, params.angle_tolerance_rad).sum())
     return total

@@ -207,6 +207,8 @@ def build_program(
     prune: bool = True,
     strengthen: bool = True,
     sided: bool = False,
+    colors: np.ndarray | None = None,
+    confidence: np.ndarray | None = None,
 ) -> LaneProgram:
     """Build the RLD program over ``points`` (N, 2) for the car at ``pose``.
 
@@ -218,7 +220,8 @@ def build_program(
     angle variables to the cones (``angle_cover``; they cut no lane graph off, and make the
     relaxation pay the angle costs). ``sided`` builds our side-aware formulation: a set of
     columns per side, each side one path starting near the car on its own side, and the lane
-    width bounded at the cones (see docs/formulation.md).
+    width bounded at the cones (see docs/formulation.md). ``colors`` (0 unknown, 1 left, 2
+    right) and ``confidence`` (0..1) per cone add the colour and confidence costs.
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
     N = points.shape[0]
@@ -252,7 +255,10 @@ def build_program(
     if start is not None:
         near = np.zeros(N, dtype=bool)
         near[list(start)] = True
-    edge_cost = costs.edge_objective(points, edges, pose, p)
+    edge_cost = costs.edge_objective(points, edges, pose, p, colors)
+    cone_cost = np.zeros(N)
+    if confidence is not None:
+        cone_cost += p.w_confidence * costs.confidence_cost(confidence)
     h = np.flatnonzero(cons.heading_mask(points, edges, pose, p.heading_radius_m,
                                          p.heading_tolerance_rad))
     wc = cons.width_conflicts(points, edges, p.min_width_m)
@@ -276,6 +282,9 @@ def build_program(
         blocks.append((a0, f0, g0, m0))
         c[a0:f0] = edge_cost
         c[f0:g0] = p.w_angle * t_cost_kept
+        c[g0:m0] = cone_cost
+        if sided and colors is not None:
+            c[g0:m0] += p.w_color * (colors == (2 if k == 0 else 1))
         _path_rows(rows, edges, triples, forbidden_pairs, N, a0, f0, g0, m0, strengthen)
     if not sided:
         a0, f0, g0, m0 = blocks[0]

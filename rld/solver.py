@@ -108,9 +108,12 @@ class RldModel:
         pose: Pose,
         time_limit_s: float | None = None,
         start: tuple[int, int] | None = None,
+        colors: np.ndarray | None = None,
+        confidence: np.ndarray | None = None,
     ) -> Lane:
         """Solve on validated ``points``. ``start`` (indices into ``points``) fixes the two near
-        endpoints, for the cross-check with CLC's starting vertices."""
+        endpoints, for the cross-check with CLC's starting vertices. ``colors`` and
+        ``confidence`` (validated, one per cone) add their costs."""
         budget = DEFAULT_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
         t0 = time.perf_counter()
         if start is None and near_car_mask(points, pose, self.params.near_radius_m).sum() < 2:
@@ -134,7 +137,9 @@ class RldModel:
             return Lane.not_found(points, f"only {window.size} cones ahead of the car", stats=stats)
         program = build_program(sub, pose, self.params, no_crossing=self.no_crossing,
                                 start=local_start, strengthen=self.backend.strengthen,
-                                sided=self.sided)
+                                sided=self.sided,
+                                colors=None if colors is None else colors[window],
+                                confidence=None if confidence is None else confidence[window])
         stats.update(program.stats)
         stats["build_time_s"] = time.perf_counter() - t0
         if program.near.sum() < 2:

@@ -137,6 +137,13 @@ class LaneParams:
     """RLD w_p (eq. 29)."""
     w_benefit: float = 2.5
     """RLD w_b (eq. 29): the reward for every chosen edge."""
+    w_color: float = 2.0
+    """Weight of the colour cost (our extension, RLD section V's future work): added for an edge
+    joining a cone labelled left to one labelled right, and in the sided formulation for a cone
+    on the side opposite to its label. Only when ``colors`` are given."""
+    w_confidence: float = 1.0
+    """Weight of the confidence cost (our extension, RLD section V): w (1 - confidence) for
+    every cone the lane uses. Only when ``confidence`` is given."""
     heading_radius_m: float = 4.0
     """RLD d_h (eq. 9): edges whose nearest point is this close to the car count for h."""
     heading_tolerance_rad: float = math.pi / 4

@@ -81,6 +81,10 @@ def test_options_are_validated():
         solve_lane(CONES, POSE, colors=[0, 1])
     with pytest.raises(ValueError, match="unknown colour"):
         solve_lane(CONES, POSE, colors=["blue"] * len(CONES))
+    with pytest.raises(ValueError, match="one value per cone"):
+        solve_lane(CONES, POSE, confidence=[0.5])
+    with pytest.raises(ValueError, match=r"\[0, 1\]"):
+        solve_lane(CONES, POSE, confidence=np.full(len(CONES), 1.5))
     with pytest.raises(ValueError, match="time_limit_s"):
         solve_lane(CONES, POSE, time_limit_s=0)
     with pytest.raises(ValueError, match="LaneParams"):

@@ -150,7 +150,7 @@ def sided_ok(points, pose, p, L, R):
     return not any(min(d(i, j) for j in L) > p.max_width_m for i in R)
 
 
-def brute_force_optimum(points, pose, p, sided=False):
+def brute_force_optimum(points, pose, p, sided=False, colors=None, confidence=None):
     cand = C.candidate_edges(points, p.max_cone_spacing_m)
     paths = simple_paths(points.shape[0], cand)
     best = math.inf
@@ -160,18 +160,21 @@ def brute_force_optimum(points, pose, p, sided=False):
             continue
         ok = sided_ok(points, pose, p, P, Q) if sided else lane_graph_ok(points, pose, p, (P, Q))
         if ok:
-            cost = costs.lane_cost(points, P, Q, pose, p)
+            cost = costs.lane_cost(points, P, Q, pose, p, colors=colors, confidence=confidence,
+                                   sided=sided)
             best = min(best, cost)
     return best
 
 
-def solve_program(points, pose, p, backend="highs", prune=True, sided=False):
+def solve_program(points, pose, p, backend="highs", prune=True, sided=False, colors=None,
+                  confidence=None):
     """Optimal objective of the program with lazy cycle cuts (inf when infeasible)."""
     from rld.program import cycle_cut
 
     be = make_backend(backend)
     # Each backend gets the program it gets in use (with or without the angle-cover rows).
-    prog = build_program(points, pose, p, prune=prune, strengthen=be.strengthen, sided=sided)
+    prog = build_program(points, pose, p, prune=prune, strengthen=be.strengthen, sided=sided,
+                         colors=colors, confidence=confidence)
     for _ in range(30):
         res = be.solve(prog, 20.0)
         if res.x is None:
@@ -304,3 +307,51 @@ def test_rld_lane_meets_the_shared_constraints():
             assert np.all(np.hypot(*np.diff(xy, axis=0).T) <= PARAMS.max_cone_spacing_m)
         assert lane.cost == pytest.approx(costs.lane_cost(f.cones, lane.left, lane.right,
                                                           f.pose, PARAMS), abs=1e-6)
+
+
+@pytest.mark.parametrize("sided", [False, True], ids=["paper", "sided"])
+@pytest.mark.parametrize("seed", range(20))
+def test_colour_and_confidence_costs_against_brute_force(seed, sided):
+    points, pose = instance(3000 + seed, 5 + seed % 3)
+    rng = np.random.default_rng(seed)
+    colors = rng.integers(0, 3, size=points.shape[0])  # random, so often wrong
+    confidence = rng.uniform(0, 1, size=points.shape[0])
+    expect = brute_force_optimum(points, pose, PARAMS, sided=sided, colors=colors,
+                                 confidence=confidence)
+    got, _ = solve_program(points, pose, PARAMS, sided=sided, colors=colors,
+                           confidence=confidence)
+    if math.isinf(expect):
+        assert math.isinf(got)
+    else:
+        assert got == pytest.approx(expect, abs=1e-6)
+
+
+def test_colour_and_confidence_costs_hand_worked():
+    colors = np.array([0, 1, 2, 1])
+    edges = np.array([[0, 1], [1, 2], [1, 3], [2, 3]])
+    assert costs.color_cost(colors, edges).tolist() == [0, 1, 0, 1]
+    np.testing.assert_allclose(costs.confidence_cost([1.0, 0.25, 0.0]), [0.0, 0.75, 1.0])
+    p = LaneParams()
+    pts = np.array([[0, 2], [3.5, 2], [0, -2], [3.5, -2]], float)
+    base = costs.lane_cost(pts, [0, 1], [2, 3], Pose(0, 0, 0), p)
+    wrong = np.array([2, 1, 2, 2])  # cone 0 labelled right but on the left
+    with_col = costs.lane_cost(pts, [0, 1], [2, 3], Pose(0, 0, 0), p, colors=wrong)
+    assert with_col == pytest.approx(base + p.w_color)  # the edge 0-1 joins right to left
+    sided = costs.lane_cost(pts, [0, 1], [2, 3], Pose(0, 0, 0), p, colors=wrong, sided=True)
+    assert sided == pytest.approx(base + 2 * p.w_color)  # and cone 0 sits on the wrong side
+    conf = costs.lane_cost(pts, [0, 1], [2, 3], Pose(0, 0, 0), p,
+                           confidence=np.array([1, 0.5, 1, 0.0]))
+    assert conf == pytest.approx(base + p.w_confidence * 1.5)
+
+
+def test_correct_colours_keep_each_boundary_to_one_label():
+    xs = np.arange(0, 18, 3.5)
+    left = np.column_stack([xs, np.full(xs.size, 2.0)])
+    right = np.column_stack([xs, np.full(xs.size, -2.0)])
+    pts = np.vstack([left, right])
+    colors = np.array([1] * xs.size + [2] * xs.size)
+    lane = solve_lane(pts, (1.0, 0.0, 0.0), method="rld", colors=colors, time_limit_s=5)
+    assert set(lane.left) <= set(range(xs.size)) and set(lane.right) >= {xs.size + 1}
+    # Every chosen edge joins cones of one label.
+    for side in (lane.left, lane.right):
+        assert len(set(colors[side])) == 1
