@@ -30,19 +30,19 @@ def _frames(n_tracks: int, stride: int, fp_rate: float = 0.2):
 
 
 def run(sizes=SIZES, backends=BACKENDS, n_tracks: int = 4, stride: int = 25,
-        time_limit_s: float = 1.0, progress: bool = True) -> list[dict]:
+        time_limit_s: float = 1.0, progress: bool = True, method: str = "rld") -> list[dict]:
     """One row per (backend, n, warm): median / p95 / max latency in ms and status counts."""
     from tqdm import tqdm
 
     frames = list(_frames(n_tracks, stride))
     rows = []
     total = len(sizes) * len(backends) * 2 * len(frames)
-    bar = tqdm(total=total, desc="rld latency", disable=not progress)
+    bar = tqdm(total=total, desc=f"{method} latency", disable=not progress)
     for backend in backends:
         for n in sizes:
             params = LaneParams(max_cones=n)
             # Compile and load everything once, outside the measurement.
-            LaneSolver("rld", params, backend).solve(frames[0][0].frame(0).cones,
+            LaneSolver(method, params, backend).solve(frames[0][0].frame(0).cones,
                                                      frames[0][0].frame(0).pose)
             for warm in (False, True):
                 lat, statuses = [], []
@@ -50,11 +50,11 @@ def run(sizes=SIZES, backends=BACKENDS, n_tracks: int = 4, stride: int = 25,
                 for lap, k in frames:
                     if warm:
                         # Warm: the solver saw the previous pose (1 m back) of the same lap.
-                        solver = LaneSolver("rld", params, backend)
+                        solver = LaneSolver(method, params, backend)
                         prev = lap.frame(max(k - 1, 0))
                         solver.solve(prev.cones, prev.pose, time_limit_s=time_limit_s)
                     else:
-                        solver = LaneSolver("rld", params, backend)
+                        solver = LaneSolver(method, params, backend)
                     f = lap.frame(k)
                     t0 = time.perf_counter()
                     lane = solver.solve(f.cones, f.pose, time_limit_s=time_limit_s)
@@ -63,6 +63,7 @@ def run(sizes=SIZES, backends=BACKENDS, n_tracks: int = 4, stride: int = 25,
                     bar.update(1)
                 lat_ms = 1000 * np.array(lat)
                 rows.append({
+                    "method": method,
                     "backend": backend, "n": n, "warm": warm, "calls": len(lat),
                     "median_ms": float(np.median(lat_ms)),
                     "p95_ms": float(np.percentile(lat_ms, 95)),
@@ -88,13 +89,14 @@ def to_markdown(rows: list[dict], time_limit_s: float) -> str:
         f"Time limit per call {time_limit_s:g} s; calls past it return the incumbent "
         "(FEASIBLE) or no lane.",
         "",
-        "| backend | n | start | calls | median (ms) | p95 (ms) | max (ms) | optimal | "
+        "| method | backend | n | start | calls | median (ms) | p95 (ms) | max (ms) | optimal | "
         "feasible | no lane |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         lines.append(
-            f"| {r['backend']} | {r['n']} | {'warm' if r['warm'] else 'cold'} | {r['calls']} | "
+            f"| {r['method']} | {r['backend']} | {r['n']} | "
+            f"{'warm' if r['warm'] else 'cold'} | {r['calls']} | "
             f"{r['median_ms']:.1f} | {r['p95_ms']:.1f} | {r['max_ms']:.1f} | {r['optimal']} | "
             f"{r['feasible']} | {r['no_lane']} |"
         )

@@ -107,7 +107,7 @@ def quality_ok(expected: set[int], lane, pose, params) -> bool:
 
 
 def run(backend: str = "cpsat", n_cones: int = 12, poses: int = 60, range_m: float = 20.0,
-        seed: int = 0, time_limit_s: float = 0.4, progress: bool = True,
+        seed: int = 0, time_limit_s: float = 0.4, progress: bool = True, method: str = "rld",
         **overrides) -> list[dict]:
     """One row per (topology, ratio): inaccurate %, no-lane count, median latency.
     ``overrides`` are ``LaneParams`` fields."""
@@ -146,8 +146,8 @@ def run(backend: str = "cpsat", n_cones: int = 12, poses: int = 60, range_m: flo
                 expected = {pos[t] for side in (track.left, track.right)
                             for t in _expected(track, side, in_track, pose)}
                 t0 = time.perf_counter()
-                lane = LaneSolver("rld", params, backend).solve(points, pose,
-                                                                time_limit_s=time_limit_s)
+                lane = LaneSolver(method, params, backend).solve(points, pose,
+                                                                 time_limit_s=time_limit_s)
                 lat.append(time.perf_counter() - t0)
                 none += not lane.ok
                 bad += not quality_ok(expected, lane, pose, params)

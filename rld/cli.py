@@ -162,14 +162,18 @@ def bench_rld(method: str, backends: str, sizes: str, n_tracks: int, stride: int
 
 
 @bench.command("rld-paper")
+@click.option("--method", type=click.Choice(["rld", "rld-sided"]), default="rld",
+              show_default=True)
 @click.option("--backend", default="cpsat", show_default=True)
 @click.option("--cones", "n_cones", default=12, show_default=True, help="Cones per window.")
 @click.option("--poses", default=60, show_default=True, help="Poses per topology and ratio.")
 @click.option("--out", default=None, help="Also write the Markdown table to this file.")
-def bench_rld_paper(backend: str, n_cones: int, poses: int, out: str | None) -> None:
+def bench_rld_paper(method: str, backend: str, n_cones: int, poses: int,
+                    out: str | None) -> None:
     """RLD accuracy in the paper's experiment (fig. 7): topologies x false-positive ratios."""
     mod = _benchmark_module("bench_rld_paper")
-    table = mod.to_markdown(mod.run(backend=backend, n_cones=n_cones, poses=poses))
+    table = mod.to_markdown(mod.run(backend=backend, n_cones=n_cones, poses=poses,
+                                    method=method))
     click.echo(table)
     if out:
         with open(out, "w") as fh:
