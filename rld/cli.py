@@ -180,6 +180,31 @@ def bench_rld_paper(method: str, backend: str, n_cones: int, poses: int,
             fh.write(table + "\n")
 
 
+@bench.command("protocol")
+@click.option("--method", type=click.Choice(sorted(METHODS)), default="rld", show_default=True)
+@click.option("--backend", default=None, help="RLD backend (default cpsat).")
+@click.option("--fp-rates", default="0,0.3", show_default=True)
+@click.option("--range-m", default=50.0, show_default=True)
+@click.option("--every", default=12, show_default=True, help="Every k-th pose of each lap.")
+@click.option("--time-limit", "time_limit_s", default=2.0, show_default=True)
+@click.option("--out", default=None, help="Also write the Markdown table to this file.")
+def bench_protocol(method: str, backend: str | None, fp_rates: str, range_m: float, every: int,
+                   time_limit_s: float, out: str | None) -> None:
+    """A method on the shared dataset tracks under the evaluation protocol (a sample)."""
+    mod = _benchmark_module("bench_protocol")
+    try:
+        rows = mod.run(method=method, backend=backend,
+                       fp_rates=[float(v) for v in fp_rates.split(",")], range_m=range_m,
+                       every=every, time_limit_s=time_limit_s)
+    except FileNotFoundError as exc:
+        raise click.ClickException(str(exc)) from exc
+    table = mod.to_markdown(rows)
+    click.echo(table)
+    if out:
+        with open(out, "w") as fh:
+            fh.write(table + "\n")
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()
 
