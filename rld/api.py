@@ -2,7 +2,7 @@
 
 Input is validated here, once; the methods behind receive clean arrays. A method is looked up
 by name in ``METHODS``; a name that does not exist is a ``ValueError``, never a stand-in lane.
-The CLC search registers here when it lands (issue 4).
+``rld.api`` reaches ``clc`` lazily, when a CLC solver is made, so ``clc`` may import the core.
 """
 
 from __future__ import annotations
@@ -18,12 +18,14 @@ from rld.types import Lane, LaneParams, Pose, as_cones, as_pose
 
 __all__ = ["solve_lane", "LaneSolver", "METHODS", "DEFAULT_METHOD", "COLOR_CODES"]
 
+
 class _NearestMethod:
     """The nearest-neighbour chain baseline (stateless)."""
 
     backends: tuple[str, ...] = ()
+    rankers = False
 
-    def __init__(self, params: LaneParams, backend: str | None = None) -> None:
+    def __init__(self, params: LaneParams, backend: str | None = None, **options) -> None:
         self.params = params
 
     def solve(self, points, pose, colors=None, time_limit_s=None, confidence=None) -> Lane:
@@ -37,10 +39,10 @@ class _RldMethod:
     """RLD (Brandes et al. 2020) with a reusable model and warm starts."""
 
     backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy")
-
+    rankers = False
     sided = False
 
-    def __init__(self, params: LaneParams, backend: str | None = None) -> None:
+    def __init__(self, params: LaneParams, backend: str | None = None, **options) -> None:
         from rld.solver import RldModel
 
         self.model = RldModel(params, backend=backend, sided=self.sided)
@@ -56,10 +58,28 @@ class _RldSidedMethod(_RldMethod):
     sided = True
 
 
+class _ClcMethod:
+    """CLC (Ivanov & Markgraf 2024): path-pair enumeration and a ranker, warm-started."""
+
+    backends: tuple[str, ...] = ()
+    rankers = True
+
+    def __init__(self, params: LaneParams, backend: str | None = None, ranker=None,
+                 **options) -> None:
+        from clc.solver import ClcModel
+
+        self.model = ClcModel(params, ranker=ranker or "learned", **options)
+
+    def solve(self, points, pose, colors=None, time_limit_s=None, confidence=None) -> Lane:
+        return self.model.solve(points, pose, colors=colors, time_limit_s=time_limit_s,
+                                confidence=confidence)
+
+
 #: method name -> class(params, backend) with .solve(points, pose, colors, time_limit_s) -> Lane
 METHODS: dict[str, Callable[..., Any]] = {
     "rld": _RldMethod,
     "rld-sided": _RldSidedMethod,
+    "clc": _ClcMethod,
     "nearest": _NearestMethod,
 }
 #: The method ``solve_lane`` uses when none is named.
@@ -72,7 +92,6 @@ def _check_method(method: str) -> str:
     if method not in METHODS:
         raise ValueError(
             f"unknown method {method!r}; available: {', '.join(sorted(METHODS))}"
-            " (clc is not implemented yet)"
         )
     return method
 
@@ -111,7 +130,9 @@ class LaneSolver:
     """A reusable solver: keeps the method's prepared state and the previous solution between
     calls (the warm start of the RLD model and the CLC search, when they land).
 
-    ``backend`` selects an RLD solver backend; methods without backends reject it.
+    ``backend`` selects an RLD solver backend; ``ranker`` a CLC ranker (``learned``,
+    ``rld_cost``, ``longest`` or an object with ``score``); a method without backends or
+    rankers rejects them.
     """
 
     def __init__(
@@ -119,6 +140,7 @@ class LaneSolver:
         method: str = DEFAULT_METHOD,
         params: LaneParams | None = None,
         backend: str | None = None,
+        ranker: Any = None,
     ) -> None:
         self.method = _check_method(method)
         self.params = params if params is not None else LaneParams()
@@ -127,8 +149,11 @@ class LaneSolver:
         kind = METHODS[self.method]
         if backend is not None and not kind.backends:
             raise ValueError(f"method {method!r} has no solver backends (got {backend!r})")
+        if ranker is not None and not kind.rankers:
+            raise ValueError(f"method {method!r} takes no ranker (got {ranker!r})")
         self.backend = backend
-        self._impl = kind(self.params, backend=backend)
+        self.ranker = ranker
+        self._impl = kind(self.params, backend=backend, ranker=ranker)
         self.previous: Lane | None = None
 
     def solve(
@@ -168,6 +193,7 @@ def solve_lane(
     colors: Any = None,
     time_limit_s: float | None = None,
     confidence: Any = None,
+    ranker: Any = None,
 ) -> Lane:
     """Find the driving lane in ``cones`` ahead of the car at ``pose`` (stateless).
 
@@ -177,8 +203,10 @@ def solve_lane(
     backend. ``colors``: optional per-cone labels (``unknown``/``left``/``right`` or 0/1/2),
     a cost for RLD (``LaneParams.w_color``). ``confidence``: optional per-cone detection
     confidence in [0, 1], a cost for RLD (``LaneParams.w_confidence``). The nearest-neighbour
-    baseline ignores both. ``time_limit_s``: the solve's time budget (RLD default 0.4 s).
+    baseline ignores both. ``time_limit_s``: the solve's time budget (RLD default 0.4 s; CLC is
+    bounded by ``params.max_iterations`` instead). ``ranker``: the CLC ranker (default
+    ``learned``).
     """
-    return LaneSolver(method=method, params=params, backend=backend).solve(
+    return LaneSolver(method=method, params=params, backend=backend, ranker=ranker).solve(
         cones, pose, colors=colors, time_limit_s=time_limit_s, confidence=confidence
     )

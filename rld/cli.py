@@ -131,6 +131,72 @@ def _benchmark_module(name: str):
     )
 
 
+@main.command("train-ranker")
+@click.option("--generated", "n_generated", default=8, show_default=True,
+              help="Generated tracks to train on (seeds 1000, 1001, ...).")
+@click.option("--train-tracks", default="1,2,3", show_default=True,
+              help="Shared dataset tracks to train on (the others are held out).")
+@click.option("--fp-rates", default="0,0.1,0.3", show_default=True)
+@click.option("--ranges", default="50", show_default=True, help="Perception ranges, metres.")
+@click.option("--every", default=4, show_default=True, help="Every k-th pose of each lap.")
+@click.option("--epochs", default=200, show_default=True)
+@click.option("--seed", default=0, show_default=True)
+@click.option("--out", default=None, help="Weights file (default: the packaged model).")
+def train_ranker(n_generated: int, train_tracks: str, fp_rates: str, ranges: str, every: int,
+                 epochs: int, seed: int, out: str | None) -> None:
+    """Train CLC's learned ranker (section VII) and write its weights and JSON card."""
+    import datetime
+
+    try:
+        from clc import train
+    except ImportError as exc:  # pragma: no cover - torch is imported lazily inside
+        raise click.ClickException(str(exc)) from exc
+    try:
+        import torch  # noqa: F401
+    except ImportError as exc:
+        raise click.ClickException(
+            "training needs torch: pip install -e '.[train]'") from exc
+    from clc.ranker import DEFAULT_MODEL, LearnedRanker, LongestRanker
+    from rld.generator import generate_track
+    from rld.tracks import DATASET_TRACKS, find_dataset_dir, load_dataset_track
+
+    fps = [float(v) for v in fp_rates.split(",")]
+    rs = [float(v) for v in ranges.split(",")]
+    folder = find_dataset_dir()
+    wanted = [int(v) for v in train_tracks.split(",") if v.strip()]
+    shared = {k: load_dataset_track(folder, k) for k in DATASET_TRACKS} if folder else {}
+    held = [shared[k] for k in DATASET_TRACKS if k not in wanted and k in shared]
+    tracks = [generate_track(1000 + s) for s in range(n_generated)]
+    tracks += [shared[k] for k in wanted if k in shared]
+    if not tracks:
+        raise click.ClickException("no tracks to train on")
+    lists = train.collect(tracks, fp_rates=fps, ranges=rs, every=every, seed=seed)
+    held_lists = train.collect(held, fp_rates=fps, ranges=rs, every=every, seed=seed)
+    arrays = train.train_ranker(lists, seed=seed, epochs=epochs)
+    model = LearnedRanker(arrays["W1"], arrays["b1"], arrays["w2"], arrays["b2"],
+                          arrays["mean"], arrays["std"])
+    scores = {"training": train.top_pick_iou(model, lists),
+              "held_out": train.top_pick_iou(model, held_lists) if held_lists else None}
+    card = {
+        "date": datetime.date.today().isoformat(),
+        "training_data": {"generated_track_seeds": [1000 + s for s in range(n_generated)],
+                          "dataset_tracks": [t.name for t in tracks if t.name.startswith("track")],
+                          "held_out_tracks": [t.name for t in held], "fp_rates": fps,
+                          "ranges_m": rs, "every_kth_pose": every, "lists": len(lists),
+                          "candidates": int(sum(cl.iou.size for cl in lists))},
+        "hyper_parameters": {"epochs": epochs, "lr": 0.008, "batch_size": 8192,
+                             "wrong_cone_penalty": 0.03,
+                             "lambda_iou": 20.0, "hidden": 100, "pairs_per_list": 256},
+        "seed": seed,
+        "scores": scores,
+        "longest_lane_baseline": {"held_out": train.top_pick_iou(LongestRanker(), held_lists)
+                                  if held_lists else None},
+    }
+    path = train.save_ranker(arrays, out or DEFAULT_MODEL, card)
+    click.echo(f"wrote {path} and {path.with_suffix('.json')}")
+    click.echo(f"mean IoU of the top pick: {scores}")
+
+
 @main.group()
 def bench() -> None:
     """Run the benchmarks of benchmarks/ (from a checkout) and print their tables."""
@@ -203,6 +269,38 @@ def bench_protocol(method: str, backend: str | None, fp_rates: str, range_m: flo
     if out:
         with open(out, "w") as fh:
             fh.write(table + "\n")
+
+
+@bench.command("clc")
+@click.option("--ranges", default="30,50", show_default=True, help="Perception ranges, metres.")
+@click.option("--fp-rates", default="0,0.1,0.3,0.5", show_default=True)
+@click.option("--every", default=4, show_default=True, help="Every k-th pose of each lap.")
+@click.option("--ranker", default=None, help="learned (default), rld_cost or longest.")
+@click.option("--iterations/--no-iterations", default=True, show_default=True,
+              help="Also latency against it_max and map size (fig. 16).")
+@click.option("--out", default=None, help="Also write the Markdown tables to this file.")
+def bench_clc(ranges: str, fp_rates: str, every: int, ranker: str | None, iterations: bool,
+              out: str | None) -> None:
+    """CLC latency, accuracy and completeness on the shared tracks (protocol of DESIGN.md)."""
+    mod = _benchmark_module("bench_clc")
+    try:
+        rows = mod.run(ranges=[float(v) for v in ranges.split(",")],
+                       fp_rates=[float(v) for v in fp_rates.split(",")], every=every,
+                       ranker=ranker)
+        parts = [mod.to_markdown(rows)]
+        if iterations:
+            parts.append(mod.iterations_markdown(mod.run_iterations(ranker=ranker)))
+    except FileNotFoundError as exc:
+        raise click.ClickException(str(exc)) from exc
+    ct = mod.compile_time()
+    parts.append("\n".join(f"- {k}: import {v['import_s']:.2f} s, first call "
+                           f"{v['first_call_s']:.2f} s, second call "
+                           f"{1000 * v['second_call_s']:.2f} ms" for k, v in ct.items()))
+    text = "\n\n".join(parts)
+    click.echo(text)
+    if out:
+        with open(out, "w") as fh:
+            fh.write(text + "\n")
 
 
 if __name__ == "__main__":  # pragma: no cover

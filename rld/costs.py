@@ -21,7 +21,21 @@ __all__ = [
     "lane_cost",
     "color_cost",
     "confidence_cost",
+    "ranking_features",
+    "FEATURE_NAMES",
 ]
+
+#: The CLC ranking features (section VII), in the order of ``ranking_features``.
+FEATURE_NAMES = (
+    "length_m",
+    "n_left",
+    "n_right",
+    "width_var",
+    "left_spacing_var",
+    "right_spacing_var",
+    "left_turn_var",
+    "right_turn_var",
+)
 
 
 def spacing_cost(lengths_m: np.ndarray, expected_m: float, tolerance_m: float) -> np.ndarray:
@@ -124,3 +138,32 @@ def lane_cost(
         turns = geo.polyline_turn_angles(points[idx], closed=closed)
         total += params.w_angle * float(angle_cost(turns, params.angle_tolerance_rad).sum())
     return total
+
+
+def _population_var(x: np.ndarray) -> float:
+    return float(np.var(x)) if x.size >= 2 else 0.0
+
+
+def ranking_features(left_xy: np.ndarray, right_xy: np.ndarray, closed: bool = False) -> np.ndarray:
+    """The 8 features of CLC section VII for one lane, (8,) float64 in ``FEATURE_NAMES`` order:
+    lane length (mean of the two boundary lengths, m), cones on the left and on the right,
+    the variance of the lane width (of all matching-line lengths W(L, R), CLC eq. 12, m^2),
+    the variance of the segment lengths of each boundary (m^2) and of the signed turn angles
+    between consecutive segments of each boundary (rad^2). Variances are population variances,
+    0 for fewer than two values. A closed lane counts its closing segments and the turns at
+    the wrap. The CLC search keeps the same numbers incrementally (``clc.search_kernels``)."""
+    from rld.constraints import lane_widths
+
+    L = np.asarray(left_xy, dtype=np.float64).reshape(-1, 2)
+    R = np.asarray(right_xy, dtype=np.float64).reshape(-1, 2)
+    out = np.zeros(8)
+    for k, xy in enumerate((L, R)):
+        ring = np.vstack([xy, xy[:1]]) if closed and xy.shape[0] > 1 else xy
+        seg = np.hypot(*np.diff(ring, axis=0).T) if ring.shape[0] > 1 else np.zeros(0)
+        out[0] += 0.5 * float(seg.sum())
+        out[1 + k] = xy.shape[0]
+        out[4 + k] = _population_var(seg)
+        turns = geo.polyline_turn_angles(xy, closed=closed and xy.shape[0] >= 3)
+        out[6 + k] = _population_var(turns)
+    out[3] = _population_var(lane_widths(L, R, closed))
+    return out

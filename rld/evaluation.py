@@ -43,6 +43,10 @@ class PoseRecord:
     true_length_m: float
     latency_s: float
     n_cones: int
+    iterations: int = -1
+    """Search iterations (CLC), -1 where the method has none."""
+    complete: bool | None = None
+    """The search was complete (CLC: every feasible pair enumerated); None where not a search."""
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -60,6 +64,7 @@ def run_protocol(
     stateful: bool = False,
     time_limit_s: float | None = None,
     progress: bool = False,
+    ranker=None,
 ) -> list[PoseRecord]:
     """Score ``method`` at every ``every``-th pose of each track's lap.
 
@@ -73,12 +78,16 @@ def run_protocol(
         from tqdm import tqdm
 
         bar = tqdm(total=None, desc=f"{method} R={range_m:g} FP={fp_rate:.0%}", unit="pose")
+
+    def make() -> LaneSolver:
+        return LaneSolver(method=method, params=params, backend=backend, ranker=ranker)
+
     for track in tracks:
         lap = simulate_lap(track, range_m=range_m, fp_rate=fp_rate, seed=seed)
-        solver = LaneSolver(method=method, params=params, backend=backend) if stateful else None
+        solver = make() if stateful else None
         for k in range(0, len(lap), every):
             frame = lap.frame(k)
-            s = solver or LaneSolver(method=method, params=params, backend=backend)
+            s = solver or make()
             t0 = time.perf_counter()
             lane = s.solve(frame.cones, frame.pose, time_limit_s=time_limit_s)
             latency = time.perf_counter() - t0
@@ -90,6 +99,8 @@ def run_protocol(
                 divergence_m=sc.divergence_m, pred_length_m=sc.pred_length_m,
                 true_length_m=sc.true_length_m, latency_s=latency,
                 n_cones=int(frame.cones.shape[0]),
+                iterations=int(lane.stats.get("iterations", -1)),
+                complete=lane.stats.get("complete"),
             ))
             if bar is not None:
                 bar.update(1)
@@ -119,4 +130,9 @@ def summarize(records: list[PoseRecord]) -> dict:
     out["latency_median_ms"] = float(np.median(lat))
     out["latency_p95_ms"] = float(np.percentile(lat, 95))
     out["latency_max_ms"] = float(lat.max())
+    out["latency_p99_ms"] = float(np.percentile(lat, 99))
+    done = [r.complete for r in records if r.complete is not None]
+    if done:
+        out["complete"] = 100.0 * float(np.mean(done))
+        out["iterations_median"] = float(np.median([r.iterations for r in records]))
     return out

@@ -1,0 +1,117 @@
+"""Rankers that pick the most likely lane among CLC's candidates (Ivanov & Markgraf 2024,
+section VII). numpy only: training lives in ``clc.train`` (torch, the ``train`` extra).
+
+Every ranker has ``name`` and ``score(points, pose, params, candidates, features)`` returning
+one score per candidate, higher is better:
+
+- ``learned``: the RankNet-style 8-100-1 ReLU network of section VII on the features of
+  ``rld.costs.ranking_features``, its weights in ``clc/models/clc_ranker.npz`` (made by
+  ``rld train-ranker``; its JSON card lies beside it).
+- ``rld_cost``: minus the RLD objective (eq. 29) of each candidate, from the shared cost module,
+  so CLC's enumeration and RLD's program can be compared on one objective.
+- ``longest``: the lane length (the paper's "simple but effective heuristic"), ties broken by
+  the number of cones.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from rld.costs import FEATURE_NAMES, lane_cost
+from rld.types import LaneParams, Pose
+
+__all__ = ["Ranker", "LongestRanker", "RldCostRanker", "LearnedRanker", "get_ranker",
+           "RANKERS", "DEFAULT_MODEL"]
+
+#: Where ``rld train-ranker`` writes the learned ranker and ``LearnedRanker.load`` reads it.
+DEFAULT_MODEL = Path(__file__).resolve().parent / "models" / "clc_ranker.npz"
+RANKERS = ("learned", "rld_cost", "longest")
+
+
+class Ranker(Protocol):
+    name: str
+
+    def score(self, points: np.ndarray, pose: Pose, params: LaneParams,
+              candidates: Sequence, features: np.ndarray) -> np.ndarray: ...
+
+
+class LongestRanker:
+    """The longest lane wins (mean boundary length, m); more cones break ties."""
+
+    name = "longest"
+
+    def score(self, points, pose, params, candidates, features) -> np.ndarray:
+        f = np.asarray(features, dtype=np.float64).reshape(-1, len(FEATURE_NAMES))
+        return f[:, 0] + 1e-6 * (f[:, 1] + f[:, 2])
+
+
+class RldCostRanker:
+    """Minus RLD's objective (eq. 29, ``rld.costs.lane_cost``): the cheapest lane wins."""
+
+    name = "rld_cost"
+
+    def score(self, points, pose, params, candidates, features) -> np.ndarray:
+        return np.array([-lane_cost(points, a, b, pose, params, closed=c)
+                         for a, b, c in candidates], dtype=np.float64)
+
+
+class LearnedRanker:
+    """Net(x) = w2 . relu(W1^T z + b1) + b2 with z the standardised features (section VII)."""
+
+    name = "learned"
+
+    def __init__(self, W1: np.ndarray, b1: np.ndarray, w2: np.ndarray, b2: float,
+                 mean: np.ndarray, std: np.ndarray) -> None:
+        self.W1 = np.asarray(W1, dtype=np.float64)
+        self.b1 = np.asarray(b1, dtype=np.float64)
+        self.w2 = np.asarray(w2, dtype=np.float64)
+        self.b2 = float(b2)
+        self.mean = np.asarray(mean, dtype=np.float64)
+        self.std = np.asarray(std, dtype=np.float64)
+        nf = len(FEATURE_NAMES)
+        h = self.b1.shape[0] if self.b1.ndim == 1 else -1
+        shapes = {"W1": (self.W1.shape, (nf, h)), "w2": (self.w2.shape, (h,)),
+                  "mean": (self.mean.shape, (nf,)), "std": (self.std.shape, (nf,))}
+        for name, (got, want) in shapes.items():
+            if h < 1 or got != want:
+                raise ValueError(f"ranker weights: {name} has shape {got}, expected {want}")
+        if not np.all(self.std > 0):
+            raise ValueError("ranker weights: std must be positive")
+
+    @classmethod
+    def load(cls, path: str | Path | None = None) -> LearnedRanker:
+        """Read weights written by ``clc.train.save_ranker`` (default ``DEFAULT_MODEL``)."""
+        path = Path(path) if path is not None else DEFAULT_MODEL
+        if not path.exists():
+            raise FileNotFoundError(
+                f"no learned CLC ranker at {path}: train one with `rld train-ranker` "
+                "(needs the train extra), or use ranker='longest'")
+        with np.load(path, allow_pickle=False) as z:
+            names = tuple(str(v) for v in z["feature_names"])
+            if names != FEATURE_NAMES:
+                raise ValueError(f"ranker features {names} differ from {FEATURE_NAMES}")
+            return cls(z["W1"], z["b1"], z["w2"], float(z["b2"]), z["mean"], z["std"])
+
+    def net(self, features: np.ndarray) -> np.ndarray:
+        z = (np.asarray(features, dtype=np.float64) - self.mean) / self.std
+        return np.maximum(z @ self.W1 + self.b1, 0.0) @ self.w2 + self.b2
+
+    def score(self, points, pose, params, candidates, features) -> np.ndarray:
+        return self.net(np.asarray(features).reshape(-1, len(FEATURE_NAMES)))
+
+
+def get_ranker(ranker: Any = "learned") -> Ranker:
+    """A ranker by name (``RANKERS``), or any object with ``score`` as it is."""
+    if hasattr(ranker, "score"):
+        return ranker
+    if ranker == "learned":
+        return LearnedRanker.load()
+    if ranker == "rld_cost":
+        return RldCostRanker()
+    if ranker == "longest":
+        return LongestRanker()
+    raise ValueError(f"unknown ranker {ranker!r}; use one of {RANKERS} or an object with score()")

@@ -1,0 +1,727 @@
+"""numba kernels of the CLC path-pair enumeration (Ivanov & Markgraf 2024, Alg. 2 and 3).
+
+Everything here works on plain arrays and is called only through ``clc.search``; nothing of
+numba leaks out. The search is the depth-first enumeration of Alg. 2 written as an explicit
+stack, with the constraints of section VI checked incrementally after every extension:
+
+- C_seg (eq. 15): an option whose turn exceeds ``phi_max`` is never taken (lemma 1: once
+  violated it stays violated, so the extension is pruned before it is made).
+- C_poly (lemma 2): the lane ring is L followed by reversed R; its edges are the L edges, the R
+  edges and the *back* edge r_0 -> l_0, which never change once made (*permanent*), and the
+  *front* edge l_n -> r_m, which every extension replaces. A permanent pair that touches is
+  final (backtrack); the front edge is re-checked every time.
+- C_width (eqs 8-13, lemma 3): every vertex and every segment of one boundary is a query whose
+  value is its distance to the whole other boundary. We keep those values exactly, per depth:
+  extending L adds L's new queries and can only lower R's values (the target grew), so a value
+  below ``w_min`` is final; a value above ``w_max`` can still fall, but only when the *other*
+  boundary grows, so it is final when that boundary can no longer be extended in this subtree.
+
+Deviation from the paper, on purpose: Alg. 3 splits matching lines into fixed and mutable ones
+and never recomputes the fixed ones, which makes the width depend on the order in which the
+boundaries were extended. We keep the width of eqs 11-13 exactly (the same numbers as
+``rld.constraints.lane_widths``, bit for bit), so every emitted pair satisfies the shared
+whole-path predicate ``lane_is_feasible`` and the pruning is provably sound: with no iteration
+limit the search returns exactly the feasible path pairs (theorem 4; tested against brute
+force). Culling by bounding circles and boxes (with a margin far above rounding) keeps the
+update cheap without changing any value. We also tried the paper's stronger rule as a heuristic
+(backtrack when a too-wide matching line does not end at the other boundary's last cone): on
+the shared tracks (R = 50 m, every 10th pose, longest-lane ranker) it doubled the critical
+failures (7.1 -> 15.7 % at 0 % false positives, 20.7 -> 29.3 % at 30 %) and completed 5 % of
+searches instead of 1 %, so it is not used.
+
+Next-vertex decider, deviation: |turn| + ``dist_weight`` * distance instead of the turn alone
+(eq. 3); see ``LaneParams.nvd_distance_weight``. No memoization (eq. 3's cache): the decider
+scans the few neighbours of one cone, cheaper than a cache lookup here.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from rld.geometry_kernels import (
+    point_segment_distance,
+    segment_distance,
+    segment_distance_end,
+    segments_intersect,
+    turn_angle,
+)
+
+#: Margin of the culling tests, metres: far above rounding, far below any cone distance.
+CULL_MARGIN = 1e-7
+#: Segments per block of the ring check's two-level bounding boxes.
+BLOCK = 8
+N_FEATURES = 8
+
+
+@njit(cache=True)
+def _angle_between(ux, uy, vx, vy):
+    """Unsigned angle between vectors u and v, radians in [0, pi]; pi if either is zero."""
+    if (ux == 0.0 and uy == 0.0) or (vx == 0.0 and vy == 0.0):
+        return math.pi
+    return abs(math.atan2(ux * vy - uy * vx, ux * vx + uy * vy))
+
+
+@njit(cache=True)
+def _option_turn(pts, path, n, v, hx, hy):
+    """|turn| from the path's last segment (or the car heading for a single vertex) to the
+    segment path[n-1] -> v."""
+    c = path[n - 1]
+    if n >= 2:
+        p = path[n - 2]
+        return abs(turn_angle(pts[p, 0], pts[p, 1], pts[c, 0], pts[c, 1], pts[v, 0], pts[v, 1]))
+    return _angle_between(hx, hy, pts[v, 0] - pts[c, 0], pts[v, 1] - pts[c, 1])
+
+
+@njit(cache=True)
+def _choose_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx, hy,
+                   dist_weight, guide, guided):
+    """The next-vertex decider (CLC eq. 3, with a distance term): among the neighbours of the
+    path's end that are untried at this frame, in no path and within the turn limit (C_seg),
+    the one minimising |turn| + dist_weight * distance. The warm-start guide's next vertex wins
+    when the path is still a prefix of the guide. Returns (slot, vertex) or (-1, -1)."""
+    c = path[n - 1]
+    s0 = adj_ptr[c]
+    best = -1
+    best_v = -1
+    best_score = np.inf
+    want = -1
+    if guided and n < guide.shape[0]:
+        want = guide[n]
+    for k in range(adj_ptr[c + 1] - s0):
+        if tried[k]:
+            continue
+        v = adj_idx[s0 + k]
+        if in_path[v]:
+            continue
+        if n >= 2:
+            p = path[n - 2]
+            t = turn_angle(pts[p, 0], pts[p, 1], pts[c, 0], pts[c, 1], pts[v, 0], pts[v, 1])
+            if abs(t) > max_turn:
+                continue
+            a = abs(t)
+        else:
+            a = _angle_between(hx, hy, pts[v, 0] - pts[c, 0], pts[v, 1] - pts[c, 1])
+        if v == want:
+            return k, v
+        score = a + dist_weight * math.hypot(pts[v, 0] - pts[c, 0], pts[v, 1] - pts[c, 1])
+        if score < best_score:
+            best_score = score
+            best = k
+            best_v = v
+    return best, best_v
+
+
+@njit(cache=True)
+def _has_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn):
+    """Whether the path's end has any untried, unused neighbour within the turn limit."""
+    c = path[n - 1]
+    s0 = adj_ptr[c]
+    for k in range(adj_ptr[c + 1] - s0):
+        if tried[k]:
+            continue
+        v = adj_idx[s0 + k]
+        if in_path[v]:
+            continue
+        if n >= 2:
+            p = path[n - 2]
+            t = turn_angle(pts[p, 0], pts[p, 1], pts[c, 0], pts[c, 1], pts[v, 0], pts[v, 1])
+            if abs(t) > max_turn:
+                continue
+        return True
+    return False
+
+
+@njit(cache=True)
+def _lrd_diff(pts, a_prev, a_end, b_prev, b_end, hx, hy):
+    """| theta_b - theta_a | of CLC eq. 4 for boundaries ending a_prev -> a_end and
+    b_prev -> b_end (a_prev or b_prev < 0: a single vertex, use the car heading)."""
+    if a_prev >= 0:
+        ux = pts[a_end, 0] - pts[a_prev, 0]
+        uy = pts[a_end, 1] - pts[a_prev, 1]
+    else:
+        ux = hx
+        uy = hy
+    if b_prev >= 0:
+        vx = pts[b_end, 0] - pts[b_prev, 0]
+        vy = pts[b_end, 1] - pts[b_prev, 1]
+    else:
+        vx = hx
+        vy = hy
+    wx = pts[b_end, 0] - pts[a_end, 0]
+    wy = pts[b_end, 1] - pts[a_end, 1]
+    ta = _angle_between(ux, uy, wx, wy)
+    tb = _angle_between(vx, vy, -wx, -wy)
+    return abs(tb - ta)
+
+
+@njit(cache=True)
+def _query_to_target(pts, qa, qb, target, nt, tmid, trad):
+    """Distance from a query (vertex qa if qb < 0, else segment qa-qb) to the polyline of the
+    first ``nt`` vertices of ``target`` (a single point if nt == 1), exactly as
+    ``rld.constraints.lane_widths`` computes it: the minimum over the target's segments.
+    Segments are visited from the target's end (usually the nearest) and skipped when their
+    bounding circle (``tmid``, ``trad``) lies farther than the best so far plus
+    ``CULL_MARGIN``; a skipped segment cannot hold the minimum, so the value is exact."""
+    if qb < 0:
+        px = pts[qa, 0]
+        py = pts[qa, 1]
+        rq = 0.0
+    else:
+        px = 0.5 * (pts[qa, 0] + pts[qb, 0])
+        py = 0.5 * (pts[qa, 1] + pts[qb, 1])
+        rq = 0.5 * math.hypot(pts[qb, 0] - pts[qa, 0], pts[qb, 1] - pts[qa, 1])
+    if nt == 1:
+        t = target[0]
+        if qb < 0:
+            return math.hypot(px - pts[t, 0], py - pts[t, 1])
+        return segment_distance(pts[qa, 0], pts[qa, 1], pts[qb, 0], pts[qb, 1],
+                                pts[t, 0], pts[t, 1], pts[t, 0], pts[t, 1])
+    best = np.inf
+    for i in range(nt - 2, -1, -1):
+        dx = tmid[i, 0] - px
+        dy = tmid[i, 1] - py
+        reach = best + CULL_MARGIN + rq + trad[i]
+        if dx * dx + dy * dy > reach * reach:
+            continue
+        a = target[i]
+        b = target[i + 1]
+        if qb < 0:
+            d = point_segment_distance(px, py, pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1])
+        else:
+            d = segment_distance(pts[qa, 0], pts[qa, 1], pts[qb, 0], pts[qb, 1],
+                                 pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1])
+        if d < best:
+            best = d
+    return best
+
+
+@njit(cache=True)
+def _lower_other(pts, other, no, omid, orad, wv_old, ws_old, wv_new, ws_new, sa, sb):
+    """The other boundary's query values after this boundary gained segment sa-sb (its target
+    had at least two vertices before, so the values are minima over target segments).
+    ``omid``, ``orad``: midpoints and half-lengths of the other boundary's segments. A query
+    is recomputed only when the bounding circles allow the new segment to come closer than its
+    value (plus ``CULL_MARGIN``), so every value is exactly the minimum."""
+    mx = 0.5 * (pts[sa, 0] + pts[sb, 0])
+    my = 0.5 * (pts[sa, 1] + pts[sb, 1])
+    rs = 0.5 * math.hypot(pts[sb, 0] - pts[sa, 0], pts[sb, 1] - pts[sa, 1])
+    for j in range(no):
+        v = wv_old[j]
+        q = other[j]
+        dx = pts[q, 0] - mx
+        dy = pts[q, 1] - my
+        reach = v + CULL_MARGIN + rs
+        if dx * dx + dy * dy <= reach * reach:
+            d = point_segment_distance(pts[q, 0], pts[q, 1], pts[sa, 0], pts[sa, 1],
+                                       pts[sb, 0], pts[sb, 1])
+            if d < v:
+                v = d
+        wv_new[j] = v
+    for j in range(no - 1):
+        v = ws_old[j]
+        dx = omid[j, 0] - mx
+        dy = omid[j, 1] - my
+        reach = v + CULL_MARGIN + rs + orad[j]
+        if dx * dx + dy * dy <= reach * reach:
+            qa = other[j]
+            qb = other[j + 1]
+            d = segment_distance(pts[qa, 0], pts[qa, 1], pts[qb, 0], pts[qb, 1],
+                                 pts[sa, 0], pts[sa, 1], pts[sb, 0], pts[sb, 1])
+            if d < v:
+                v = d
+        ws_new[j] = v
+
+
+@njit(cache=True)
+def _recompute_all(pts, query, nq, target, nt, tmid, trad, wv, ws):
+    for j in range(nq):
+        wv[j] = _query_to_target(pts, query[j], -1, target, nt, tmid, trad)
+    for j in range(nq - 1):
+        ws[j] = _query_to_target(pts, query[j], query[j + 1], target, nt, tmid, trad)
+
+
+@njit(cache=True)
+def _boxes_apart(ax, ay, bx, by, cx, cy, dx, dy):
+    m = CULL_MARGIN
+    return (max(ax, bx) + m < min(cx, dx) or max(cx, dx) + m < min(ax, bx)
+            or max(ay, by) + m < min(cy, dy) or max(cy, dy) + m < min(ay, by))
+
+
+@njit(cache=True)
+def _ring_edge(pts, L, nL, R, nR, e):
+    """Endpoints (ax, ay, bx, by) of ring edge ``e`` of the lane ring L + reversed(R)."""
+    k = nL + nR
+    if e < nL - 1:
+        a = L[e]
+        b = L[e + 1]
+    elif e == nL - 1:
+        a = L[nL - 1]
+        b = R[nR - 1]
+    elif e < k - 1:
+        p = e - nL  # ring vertex nL + p is R[nR - 1 - p]
+        a = R[nR - 1 - p]
+        b = R[nR - 2 - p]
+    else:
+        a = R[0]
+        b = L[0]
+    return pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1]
+
+
+@njit(cache=True)
+def _ring_pair_bad(pts, L, nL, R, nR, i, j):
+    """The test ``rld.geometry_kernels.polyline_self_intersects`` makes for ring edges i < j."""
+    k = nL + nR
+    ax, ay, bx, by = _ring_edge(pts, L, nL, R, nR, i)
+    cx, cy, dx, dy = _ring_edge(pts, L, nL, R, nR, j)
+    if j == i + 1 or (i == 0 and j == k - 1):
+        _, end = segment_distance_end(ax, ay, bx, by, cx, cy, dx, dy)
+        return not end
+    if _boxes_apart(ax, ay, bx, by, cx, cy, dx, dy):
+        return False
+    return segments_intersect(ax, ay, bx, by, cx, cy, dx, dy)
+
+
+@njit(cache=True)
+def _edge_zero(pts, L, nL, R, nR, e):
+    ax, ay, bx, by = _ring_edge(pts, L, nL, R, nR, e)
+    return ax == bx and ay == by
+
+
+@njit(cache=True)
+def _pair_check(pts, L, nL, R, nR, e, f, bx0, bx1, by0, by1, cx0, cx1, cy0, cy1):
+    """Ring edges e (box bx0..by1) and f (box cx0..cy1) fail the pair test of
+    ``polyline_self_intersects``; disjoint boxes of non-adjacent edges cannot touch."""
+    k = nL + nR
+    i = min(e, f)
+    j = max(e, f)
+    adjacent = j == i + 1 or (i == 0 and j == k - 1)
+    if not adjacent:
+        m = CULL_MARGIN
+        if bx1 + m < cx0 or cx1 + m < bx0 or by1 + m < cy0 or cy1 + m < by0:
+            return False
+    return _ring_pair_bad(pts, L, nL, R, nR, i, j)
+
+
+@njit(cache=True)
+def _edge_vs_ring(pts, L, nL, R, nR, e, with_front, Lbox, Rbox, LblkBox, RblkBox):
+    """Ring edge ``e`` is non-degenerate and passes the pair test against every other ring
+    edge (the front edge l_n -> r_m only when ``with_front``). ``Lbox``, ``Rbox``: bounding
+    boxes (min x, max x, min y, max y) of the boundary segments by path position;
+    ``LblkBox``, ``RblkBox``: the boxes of complete blocks of ``BLOCK`` segments, which let
+    whole blocks far from edge ``e`` be skipped."""
+    k = nL + nR
+    if k < 3:
+        return True
+    ax, ay, bx, by = _ring_edge(pts, L, nL, R, nR, e)
+    if ax == bx and ay == by:
+        return False
+    bx0 = min(ax, bx)
+    bx1 = max(ax, bx)
+    by0 = min(ay, by)
+    by1 = max(ay, by)
+    m = CULL_MARGIN
+    nb = (nL - 1) // BLOCK  # complete blocks of L segments
+    for b in range(nb + 1):
+        lo = b * BLOCK
+        hi = min(lo + BLOCK, nL - 1)
+        if b < nb and (bx1 + m < LblkBox[b, 0] or LblkBox[b, 1] + m < bx0
+                       or by1 + m < LblkBox[b, 2] or LblkBox[b, 3] + m < by0):
+            continue
+        for i in range(lo, hi):  # L segment i is ring edge i
+            if i != e and _pair_check(pts, L, nL, R, nR, e, i, bx0, bx1, by0, by1, Lbox[i, 0],
+                                      Lbox[i, 1], Lbox[i, 2], Lbox[i, 3]):
+                return False
+    nb = (nR - 1) // BLOCK
+    for b in range(nb + 1):
+        lo = b * BLOCK
+        hi = min(lo + BLOCK, nR - 1)
+        if b < nb and (bx1 + m < RblkBox[b, 0] or RblkBox[b, 1] + m < bx0
+                       or by1 + m < RblkBox[b, 2] or RblkBox[b, 3] + m < by0):
+            continue
+        for j in range(lo, hi):  # R segment j (r_j - r_j+1) is ring edge k - 2 - j
+            f = k - 2 - j
+            if f != e and _pair_check(pts, L, nL, R, nR, e, f, bx0, bx1, by0, by1, Rbox[j, 0],
+                                      Rbox[j, 1], Rbox[j, 2], Rbox[j, 3]):
+                return False
+    for f in (nL - 1, k - 1):  # the front and the back edge
+        if f == e or (f == nL - 1 and not with_front):
+            continue
+        cx, cy, dx, dy = _ring_edge(pts, L, nL, R, nR, f)
+        if _pair_check(pts, L, nL, R, nR, e, f, bx0, bx1, by0, by1, min(cx, dx), max(cx, dx),
+                       min(cy, dy), max(cy, dy)):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _segment_cache(pts, a, b, box, mid, rad, i):
+    box[0] = min(pts[a, 0], pts[b, 0])
+    box[1] = max(pts[a, 0], pts[b, 0])
+    box[2] = min(pts[a, 1], pts[b, 1])
+    box[3] = max(pts[a, 1], pts[b, 1])
+    mid[0] = 0.5 * (pts[a, 0] + pts[b, 0])
+    mid[1] = 0.5 * (pts[a, 1] + pts[b, 1])
+    rad[i] = 0.5 * math.hypot(pts[b, 0] - pts[a, 0], pts[b, 1] - pts[a, 1])
+
+
+@njit(cache=True)
+def _block_box(box, i, blk):
+    """After segment ``i`` was added: when it completes a block, store the block's box."""
+    if (i + 1) % BLOCK != 0:
+        return
+    b = i // BLOCK
+    lo = b * BLOCK
+    blk[b, 0] = box[lo, 0]
+    blk[b, 1] = box[lo, 1]
+    blk[b, 2] = box[lo, 2]
+    blk[b, 3] = box[lo, 3]
+    for j in range(lo + 1, lo + BLOCK):
+        blk[b, 0] = min(blk[b, 0], box[j, 0])
+        blk[b, 1] = max(blk[b, 1], box[j, 1])
+        blk[b, 2] = min(blk[b, 2], box[j, 2])
+        blk[b, 3] = max(blk[b, 3], box[j, 3])
+
+
+@njit(cache=True)
+def _width_state(wvL, wsL, nL, wvR, wsR, nR, wmin, wmax):
+    """(any value below w_min, any L query above w_max, any R query above w_max)."""
+    short = False
+    longL = False
+    longR = False
+    for i in range(nL):
+        if wvL[i] < wmin:
+            short = True
+        elif wvL[i] > wmax:
+            longL = True
+    for i in range(nL - 1):
+        if wsL[i] < wmin:
+            short = True
+        elif wsL[i] > wmax:
+            longL = True
+    for i in range(nR):
+        if wvR[i] < wmin:
+            short = True
+        elif wvR[i] > wmax:
+            longR = True
+    for i in range(nR - 1):
+        if wsR[i] < wmin:
+            short = True
+        elif wsR[i] > wmax:
+            longR = True
+    return short, longL, longR
+
+
+@njit(cache=True)
+def _side_sums(pts, P, n, cum, cum2, tc, tc2):
+    """Prefix sums at path position n - 1 after P gained its vertex there."""
+    p = n - 1
+    a = P[p - 1]
+    b = P[p]
+    d = math.hypot(pts[b, 0] - pts[a, 0], pts[b, 1] - pts[a, 1])
+    cum[p] = cum[p - 1] + d
+    cum2[p] = cum2[p - 1] + d * d
+    if p >= 2:
+        o = P[p - 2]
+        t = turn_angle(pts[o, 0], pts[o, 1], pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1])
+        tc[p] = tc[p - 1] + t
+        tc2[p] = tc2[p - 1] + t * t
+    else:
+        tc[p] = 0.0
+        tc2[p] = 0.0
+
+
+@njit(cache=True)
+def _var_from_sums(s1, s2, m):
+    if m < 2:
+        return 0.0
+    mean = s1 / m
+    v = s2 / m - mean * mean
+    return v if v > 0.0 else 0.0
+
+
+@njit(cache=True)
+def _features(wvL, wsL, nL, wvR, wsR, nR, Lcum, Lcum2, Ltc, Ltc2, Rcum, Rcum2, Rtc, Rtc2,
+              out):
+    """The 8 ranking features of ``rld.costs.ranking_features`` (CLC section VII) from the
+    search state: prefix sums of both boundaries and the current width values."""
+    out[0] = 0.5 * (Lcum[nL - 1] + Rcum[nR - 1])
+    out[1] = nL
+    out[2] = nR
+    s = 0.0
+    m = 0
+    for i in range(nL):
+        s += wvL[i]
+    for i in range(nL - 1):
+        s += wsL[i]
+    for i in range(nR):
+        s += wvR[i]
+    for i in range(nR - 1):
+        s += wsR[i]
+    m = 2 * nL + 2 * nR - 2
+    mean = s / m
+    v = 0.0
+    for i in range(nL):
+        v += (wvL[i] - mean) ** 2
+    for i in range(nL - 1):
+        v += (wsL[i] - mean) ** 2
+    for i in range(nR):
+        v += (wvR[i] - mean) ** 2
+    for i in range(nR - 1):
+        v += (wsR[i] - mean) ** 2
+    out[3] = v / m if m >= 2 else 0.0
+    out[4] = _var_from_sums(Lcum[nL - 1], Lcum2[nL - 1], nL - 1)
+    out[5] = _var_from_sums(Rcum[nR - 1], Rcum2[nR - 1], nR - 1)
+    out[6] = _var_from_sums(Ltc[nL - 1], Ltc2[nL - 1], nL - 2)
+    out[7] = _var_from_sums(Rtc[nR - 1], Rtc2[nR - 1], nR - 2)
+
+
+@njit(cache=True)
+def _grow_int(a, need):
+    if need <= a.shape[0]:
+        return a
+    b = np.empty(max(need, 2 * a.shape[0]), dtype=a.dtype)
+    b[: a.shape[0]] = a
+    return b
+
+
+@njit(cache=True)
+def _grow_rows(a, need):
+    if need <= a.shape[0]:
+        return a
+    b = np.empty((max(need, 2 * a.shape[0]), a.shape[1]), dtype=a.dtype)
+    b[: a.shape[0]] = a
+    return b
+
+
+@njit(cache=True)
+def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, wmin, wmax,
+                    dist_weight, max_iterations, guide_l, guide_r):
+    """CLC Alg. 2: enumerate the path pairs from (start_l, start_r) that satisfy CD (eq. 6).
+
+    ``pts`` (N, 2) float64 metres; ``adj_ptr`` (N+1,), ``adj_idx`` the search graph in CSR form
+    (neighbours sorted by index); ``hx, hy`` the car's unit heading; ``max_turn`` phi_max (rad);
+    ``wmin``, ``wmax`` the width bounds (m); ``dist_weight`` the NVD distance term (rad/m);
+    ``max_iterations`` it_max (<= 0: no limit); ``guide_l``, ``guide_r`` the warm-start paths
+    (may be empty) the search follows first.
+
+    Returns ``(left_flat, left_ptr, right_flat, right_ptr, features, iterations, complete)``:
+    candidate k's left boundary is ``left_flat[left_ptr[k]:left_ptr[k+1]]`` (likewise right),
+    its 8 ranking features ``features[k]`` (``rld.costs.ranking_features``, kept
+    incrementally), in the order found; ``complete`` is True when the search ran out of
+    options before the limit.
+    """
+    N = pts.shape[0]
+    maxdeg = 1
+    for v in range(N):
+        d = adj_ptr[v + 1] - adj_ptr[v]
+        if d > maxdeg:
+            maxdeg = d
+    L = np.empty(N, dtype=np.int64)
+    R = np.empty(N, dtype=np.int64)
+    in_path = np.zeros(N, dtype=np.bool_)
+    L[0] = start_l
+    R[0] = start_r
+    nL = 1
+    nR = 1
+    in_path[start_l] = True
+    in_path[start_r] = True
+    # Per frame (depth): tried options of each side's end, the side that made the frame,
+    # and the width query values.
+    D = N + 1
+    triedL = np.zeros((D, maxdeg), dtype=np.bool_)
+    triedR = np.zeros((D, maxdeg), dtype=np.bool_)
+    made_by = np.full(D, -1, dtype=np.int64)
+    wvL = np.empty((D, N))
+    wsL = np.empty((D, N))
+    wvR = np.empty((D, N))
+    wsR = np.empty((D, N))
+    # Guide prefix flags: on_gl[i] = L[:i+1] == guide_l[:i+1].
+    on_gl = np.zeros(N, dtype=np.bool_)
+    on_gr = np.zeros(N, dtype=np.bool_)
+    on_gl[0] = guide_l.shape[0] > 0 and guide_l[0] == start_l
+    on_gr[0] = guide_r.shape[0] > 0 and guide_r[0] == start_r
+
+    cap = 64
+    lf = np.empty(cap * 4, dtype=np.int64)
+    rf = np.empty(cap * 4, dtype=np.int64)
+    lp = np.zeros(cap + 1, dtype=np.int64)
+    rp = np.zeros(cap + 1, dtype=np.int64)
+    feats = np.empty((cap, 8))
+    K = 0
+    Lbox = np.empty((N, 4))
+    Rbox = np.empty((N, 4))
+    Lmid = np.empty((N, 2))
+    Rmid = np.empty((N, 2))
+    Lrad = np.empty(N)
+    Rrad = np.empty(N)
+    LblkBox = np.empty((N // BLOCK + 1, 4))
+    RblkBox = np.empty((N // BLOCK + 1, 4))
+    # Prefix sums by path position for the ranking features: length, squared segment length,
+    # turn and squared turn (turns at vertices 1..i-1).
+    Lcum = np.zeros(N)
+    Lcum2 = np.zeros(N)
+    Ltc = np.zeros(N)
+    Ltc2 = np.zeros(N)
+    Rcum = np.zeros(N)
+    Rcum2 = np.zeros(N)
+    Rtc = np.zeros(N)
+    Rtc2 = np.zeros(N)
+
+    d0 = math.hypot(pts[start_l, 0] - pts[start_r, 0], pts[start_l, 1] - pts[start_r, 1])
+    wvL[0, 0] = d0
+    wvR[0, 0] = d0
+    iterations = 0
+    complete = True
+    if d0 < wmin or (pts[start_l, 0] == pts[start_r, 0] and pts[start_l, 1] == pts[start_r, 1]):
+        # The start pair is already narrower than the lane can be: no extension can help, and
+        # a zero-length back edge makes every ring non-simple.
+        return lf[:0], lp[:1], rf[:0], rp[:1], feats[:0], 0, True
+    depth = 0
+    while True:
+        if max_iterations > 0 and iterations >= max_iterations:
+            complete = False
+            break
+        f = depth
+        kl, vl = _choose_option(pts, adj_ptr, adj_idx, L, nL, triedL[f], in_path, max_turn,
+                                hx, hy, dist_weight, guide_l, on_gl[nL - 1])
+        kr, vr = _choose_option(pts, adj_ptr, adj_idx, R, nR, triedR[f], in_path, max_turn,
+                                hx, hy, dist_weight, guide_r, on_gr[nR - 1])
+        if kl < 0 and kr < 0:
+            # Frame exhausted: undo the extension that made it.
+            if depth == 0:
+                break
+            s = made_by[depth]
+            if s == 0:
+                nL -= 1
+                in_path[L[nL]] = False
+            else:
+                nR -= 1
+                in_path[R[nR]] = False
+            depth -= 1
+            continue
+        # Warm start: a side whose next guide cone is the chosen option goes first, so the
+        # search rebuilds the previous lane before it explores beyond it.
+        gl_next = on_gl[nL - 1] and nL < guide_l.shape[0] and kl >= 0 and vl == guide_l[nL]
+        gr_next = on_gr[nR - 1] and nR < guide_r.shape[0] and kr >= 0 and vr == guide_r[nR]
+        if kl < 0:
+            side = 1
+        elif kr < 0:
+            side = 0
+        elif gl_next != gr_next:
+            side = 0 if gl_next else 1
+        else:
+            _, longL, longR = _width_state(wvL[f], wsL[f], nL, wvR[f], wsR[f], nR, wmin, wmax)
+            if longL and not longR:
+                side = 1  # an L query too wide: only R growing can fix it
+            elif longR and not longL:
+                side = 0
+            else:
+                pl = L[nL - 2] if nL >= 2 else -1
+                pr = R[nR - 2] if nR >= 2 else -1
+                # Left-right decider, eqs 4-5: the side whose extension keeps both equally
+                # advanced.
+                diff_l = _lrd_diff(pts, L[nL - 1], vl, pr, R[nR - 1], hx, hy)
+                diff_r = _lrd_diff(pts, pl, L[nL - 1], R[nR - 1], vr, hx, hy)
+                side = 0 if diff_l < diff_r else 1
+        iterations += 1
+        g = f + 1
+        if side == 0:
+            triedL[f, kl] = True
+            triedL[g, :] = False
+            triedR[g, :] = triedR[f, :]
+            L[nL] = vl
+            nL += 1
+            in_path[vl] = True
+            _segment_cache(pts, L[nL - 2], vl, Lbox[nL - 2], Lmid[nL - 2], Lrad, nL - 2)
+            _block_box(Lbox, nL - 2, LblkBox)
+            _side_sums(pts, L, nL, Lcum, Lcum2, Ltc, Ltc2)
+            on_gl[nL - 1] = on_gl[nL - 2] and nL - 1 < guide_l.shape[0] and \
+                guide_l[nL - 1] == vl
+            # Width values: L's values are unchanged (R did not move), new L queries, R's
+            # values fall to the new L segment.
+            wvL[g, : nL - 1] = wvL[f, : nL - 1]
+            wsL[g, : nL - 2] = wsL[f, : nL - 2]
+            wvL[g, nL - 1] = _query_to_target(pts, vl, -1, R, nR, Rmid, Rrad)
+            wsL[g, nL - 2] = _query_to_target(pts, L[nL - 2], vl, R, nR, Rmid, Rrad)
+            if nL == 2:
+                _recompute_all(pts, R, nR, L, nL, Lmid, Lrad, wvR[g], wsR[g])
+            else:
+                _lower_other(pts, R, nR, Rmid, Rrad, wvR[f], wsR[f], wvR[g], wsR[g],
+                             L[nL - 2], vl)
+            new_edge = nL - 2
+        else:
+            triedR[f, kr] = True
+            triedR[g, :] = False
+            triedL[g, :] = triedL[f, :]
+            R[nR] = vr
+            nR += 1
+            in_path[vr] = True
+            _segment_cache(pts, R[nR - 2], vr, Rbox[nR - 2], Rmid[nR - 2], Rrad, nR - 2)
+            _block_box(Rbox, nR - 2, RblkBox)
+            _side_sums(pts, R, nR, Rcum, Rcum2, Rtc, Rtc2)
+            on_gr[nR - 1] = on_gr[nR - 2] and nR - 1 < guide_r.shape[0] and \
+                guide_r[nR - 1] == vr
+            wvR[g, : nR - 1] = wvR[f, : nR - 1]
+            wsR[g, : nR - 2] = wsR[f, : nR - 2]
+            wvR[g, nR - 1] = _query_to_target(pts, vr, -1, L, nL, Lmid, Lrad)
+            wsR[g, nR - 2] = _query_to_target(pts, R[nR - 2], vr, L, nL, Lmid, Lrad)
+            if nR == 2:
+                _recompute_all(pts, L, nL, R, nR, Rmid, Rrad, wvL[g], wsL[g])
+            else:
+                _lower_other(pts, L, nL, Lmid, Lrad, wvL[f], wsL[f], wvL[g], wsL[g],
+                             R[nR - 2], vr)
+            new_edge = nL  # the new R edge's ring index
+        made_by[g] = side
+        # C_poly: the new permanent edge, and (when nL + nR reaches 3) the back edge, which
+        # only now becomes a ring edge; then the front edge.
+        perm_ok = _edge_vs_ring(pts, L, nL, R, nR, new_edge, False, Lbox, Rbox, LblkBox,
+                                RblkBox)
+        if perm_ok and nL + nR == 3:
+            perm_ok = not _edge_zero(pts, L, nL, R, nR, nL + nR - 1)
+        short, longL, longR = _width_state(wvL[g], wsL[g], nL, wvR[g], wsR[g], nR, wmin, wmax)
+        feasible = perm_ok and not short and not longL and not longR
+        if feasible:
+            feasible = _edge_vs_ring(pts, L, nL, R, nR, nL - 1, True, Lbox, Rbox, LblkBox,
+                                     RblkBox)
+        if feasible:
+            need = lp[K] + nL
+            if need > lf.shape[0]:
+                lf = _grow_int(lf, need)
+            need = rp[K] + nR
+            if need > rf.shape[0]:
+                rf = _grow_int(rf, need)
+            if K + 2 > lp.shape[0]:
+                lp = _grow_int(lp, K + 2)
+                rp = _grow_int(rp, K + 2)
+            if K + 1 > feats.shape[0]:
+                feats = _grow_rows(feats, K + 1)
+            lf[lp[K]: lp[K] + nL] = L[:nL]
+            rf[rp[K]: rp[K] + nR] = R[:nR]
+            lp[K + 1] = lp[K] + nL
+            rp[K + 1] = rp[K] + nR
+            _features(wvL[g], wsL[g], nL, wvR[g], wsR[g], nR, Lcum, Lcum2, Ltc, Ltc2, Rcum,
+                      Rcum2, Rtc, Rtc2, feats[K])
+            K += 1
+        # Backtracking decider (lemmas 1-3, made exact): a broken permanent ring edge or a
+        # width below w_min is final; a width above w_max is final when the boundary that
+        # could fix it has no option left in this subtree.
+        backtrack = (not perm_ok) or short
+        if not backtrack and longL:
+            backtrack = not _has_option(pts, adj_ptr, adj_idx, R, nR, triedR[g], in_path,
+                                        max_turn)
+        if not backtrack and longR:
+            backtrack = not _has_option(pts, adj_ptr, adj_idx, L, nL, triedL[g], in_path,
+                                        max_turn)
+        if backtrack:
+            if side == 0:
+                nL -= 1
+                in_path[L[nL]] = False
+            else:
+                nR -= 1
+                in_path[R[nR]] = False
+        else:
+            depth = g
+    return lf[: lp[K]], lp[: K + 1], rf[: rp[K]], rp[: K + 1], feats[:K], iterations, complete

@@ -1,0 +1,134 @@
+"""The reusable CLC model (Ivanov & Markgraf 2024, Alg. 1): search, closings, ranking, warm
+start.
+
+``ClcModel.solve(points, pose)`` enumerates candidate lanes with ``clc.search`` and returns the
+one the ranker scores highest as a ``Lane``. Warm start (IV-F): the previous best lane is kept
+as positions; on the next call its cones are matched to the new map's cones (nearest within
+0.5 m: SLAM maps keep their cones), each boundary is cut to begin at the new start vertex, and
+the search follows it first, so the iteration budget goes to the frontier of the map and the lane
+grows from call to call. The guide only orders the search: with no iteration limit the
+candidates are the same with or without it.
+
+Closing (IV-E), deviation: the paper adds the closing of every closable candidate to the
+candidates before ranking; we close only the ranked winner (when an edge joins each boundary's
+last cone to its first and the closed lane passes the shared ``lane_is_feasible``). A closing
+adds just the two closing edges to a candidate already found, and checking it costs the whole-path
+predicate (about 0.5 ms on a full-lap lane), which for every closable candidate of a full map
+(tens of them) would dominate the call.
+
+Time: the search is bounded by ``max_iterations`` (its run time grows linearly with them, CLC
+fig. 16), not by a clock inside the compiled loop; ``time_limit_s`` is accepted for the common
+interface and ``lane.stats["over_time_limit"]`` says when a call exceeded it.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from clc.ranker import get_ranker
+from clc.search import closable, enumerate_candidates
+from rld.constraints import find_starting_vertices, lane_is_feasible
+from rld.types import Lane, LaneParams, LaneStatus, Pose
+
+__all__ = ["ClcModel", "MATCH_TOLERANCE_M"]
+
+log = logging.getLogger(__name__)
+
+MATCH_TOLERANCE_M = 0.5
+
+
+def _match(prev_xy: np.ndarray, tree: cKDTree) -> np.ndarray:
+    """Indices of the new cones nearest the previous boundary's positions, cut at the first
+    one without a cone within the tolerance."""
+    if prev_xy.shape[0] == 0:
+        return np.zeros(0, dtype=np.int64)
+    d, idx = tree.query(prev_xy, distance_upper_bound=MATCH_TOLERANCE_M)
+    bad = np.flatnonzero(~np.isfinite(d))
+    stop = bad[0] if bad.size else idx.size
+    return np.asarray(idx[:stop], dtype=np.int64)
+
+
+def _guide_from(seq: np.ndarray, start: int) -> np.ndarray:
+    """The part of ``seq`` from ``start`` on (empty when ``start`` is not in it)."""
+    hit = np.flatnonzero(seq == start)
+    if hit.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    out = seq[hit[0]:]
+    _, first = np.unique(out, return_index=True)  # a repeated match ends the guide
+    if first.size != out.size:
+        out = out[: np.setdiff1d(np.arange(out.size), first).min()]
+    return out
+
+
+class ClcModel:
+    """CLC with a pluggable ranker (``learned``, ``rld_cost``, ``longest`` or an object with
+    ``score``) and warm starts from the previous lane (``warm_start=False`` turns them off)."""
+
+    def __init__(self, params: LaneParams, ranker="learned", graph: str = "radius",
+                 warm_start: bool = True) -> None:
+        self.params = params
+        self.graph = graph
+        self.warm_start = warm_start
+        self.ranker_name = ranker if isinstance(ranker, str) else getattr(ranker, "name", "custom")
+        try:
+            self.ranker = get_ranker(ranker)
+        except FileNotFoundError as exc:
+            if ranker != "learned":
+                raise
+            log.warning("%s; ranking by lane length instead", exc)
+            self.ranker = get_ranker("longest")
+            self.ranker_name = "longest (no learned model)"
+        self._prev: tuple[np.ndarray, np.ndarray] | None = None
+
+    def reset(self) -> None:
+        """Forget the previous lane (no warm start on the next call)."""
+        self._prev = None
+
+    def solve(self, points: np.ndarray, pose: Pose, colors=None, time_limit_s=None,
+              confidence=None) -> Lane:
+        t0 = time.perf_counter()
+        stats: dict = {"ranker": self.ranker_name, "graph": self.graph}
+        start = find_starting_vertices(points, pose, self.params.near_radius_m)
+        guide = None
+        if self.warm_start and self._prev is not None and start is not None:
+            tree = cKDTree(points)
+            gl = _guide_from(_match(self._prev[0], tree), start[0])
+            gr = _guide_from(_match(self._prev[1], tree), start[1])
+            if gl.size > 1 or gr.size > 1:
+                guide = (gl, gr)
+                stats["warm_start_cones"] = int(gl.size + gr.size)
+        res = enumerate_candidates(points, pose, self.params, graph=self.graph, start=start,
+                                   guide=guide)
+        stats.update(iterations=res.iterations, complete=res.complete,
+                     n_candidates=len(res.candidates), n_cones_used=int(points.shape[0]))
+        if colors is not None or confidence is not None:
+            stats["note"] = "CLC does not use colors or confidence (section III-A)"
+        if res.start is None:
+            self._prev = None
+            return Lane.not_found(points, f"no cone within {self.params.near_radius_m} m of the "
+                                  "car on each side (CLC IV-C)", stats=stats)
+        stats["start"] = res.start
+        if not res.candidates:
+            self._prev = None
+            return Lane.not_found(points, "no path pair from the start cones satisfies the "
+                                  "lane constraints", stats=stats)
+        scores = np.asarray(self.ranker.score(points, pose, self.params, res.candidates,
+                                              res.features), dtype=np.float64)
+        best = int(np.argmax(scores))  # ties: the first found
+        left, right, closed = res.candidates[best]
+        left, right = left.copy(), right.copy()
+        if not closed and closable(res.graph, left, right):
+            closed = lane_is_feasible(points[left], points[right], self.params, closed=True)
+        self._prev = (points[left].copy(), points[right].copy())
+        elapsed = time.perf_counter() - t0
+        if time_limit_s is not None:
+            stats["over_time_limit"] = bool(elapsed > time_limit_s)
+        status = LaneStatus.OPTIMAL if res.complete else LaneStatus.FEASIBLE
+        message = ("every feasible path pair was enumerated" if res.complete else
+                   f"the search stopped at it_max = {self.params.max_iterations} iterations")
+        return Lane(cones=points, left=left, right=right, status=status, message=message,
+                    cost=float(scores[best]), closed=bool(closed), stats=stats)

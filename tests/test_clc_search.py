@@ -1,0 +1,215 @@
+"""The CLC search against brute force (theorem 4, shown empirically) and its public behaviour.
+
+Brute force: every pair of simple paths from the two start vertices in the same search graph,
+filtered by the shared whole-path predicate ``lane_is_feasible``. With no iteration limit the
+search must return exactly that set. Since the search emits a pair exactly when its incremental
+checks pass, set equality also shows that after every extension the incremental C_seg, C_poly
+and C_width agree with the whole-path predicates, and that no backtrack ever cut off a
+feasible pair.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from clc.search import closable, enumerate_candidates, search_graph
+from rld import LaneParams, LaneSolver, LaneStatus, Pose, solve_lane
+from rld.constraints import c_seg, find_starting_vertices, lane_is_feasible
+from rld.costs import ranking_features
+
+PARAMS = LaneParams()
+POSE = Pose(0.0, 0.0, 0.0)
+
+
+def lane_instance(seed: int, n: int) -> np.ndarray:
+    """Two noisy rows of cones (a lane 3.5 m wide along +x) and 1-3 clutter cones, shuffled."""
+    rng = np.random.default_rng(seed)
+    k = n // 2
+    ne = int(rng.integers(1, 4))
+    xs = np.cumsum(rng.uniform(2.0, 4.0, size=k)) - 3.0
+    left = np.column_stack([xs, 1.75 + rng.normal(0, 0.3, k)])
+    xs = np.cumsum(rng.uniform(2.0, 4.0, size=n - k - ne)) - 3.0
+    right = np.column_stack([xs, -1.75 + rng.normal(0, 0.3, n - k - ne)])
+    extra = rng.uniform([-2, -4], [10, 4], size=(ne, 2))
+    pts = np.vstack([left, right, extra])
+    return pts[rng.permutation(n)]
+
+
+def brute_force(points: np.ndarray, params: LaneParams, start: tuple[int, int]) -> set:
+    """All feasible (left, right) path pairs from ``start``, by enumeration of simple paths.
+    Paths are pruned by C_seg on their own (C_seg of a pair is C_seg of each path), which
+    changes no answer."""
+    g = search_graph(points, params)
+
+    def paths(s: int) -> list[tuple[int, ...]]:
+        out = []
+
+        def rec(path: list[int]) -> None:
+            out.append(tuple(path))
+            for v in g.neighbours(path[-1]):
+                v = int(v)
+                if v in path:
+                    continue
+                nxt = path + [v]
+                one = points[nxt[:1]]
+                if len(nxt) >= 3 and not c_seg(points[nxt], one, params.max_turn_angle_rad):
+                    continue
+                rec(nxt)
+
+        rec([s])
+        return out
+
+    found = set()
+    for L in paths(start[0]):
+        for R in paths(start[1]):
+            if len(L) + len(R) < 3 or set(L) & set(R):
+                continue
+            if lane_is_feasible(points[list(L)], points[list(R)], params):
+                found.add((L, R))
+    return found
+
+
+def as_set(result) -> set:
+    return {(tuple(a.tolist()), tuple(b.tolist())) for a, b, closed in result.candidates
+            if not closed}
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(5, 9))
+def test_enumeration_is_complete_and_sound(seed, n):
+    pts = lane_instance(seed, n)
+    start = find_starting_vertices(pts, POSE, PARAMS.near_radius_m)
+    res = enumerate_candidates(pts, POSE, PARAMS, max_iterations=0)
+    if start is None:
+        assert res.start is None and len(res.candidates) == 0
+        return
+    expected = brute_force(pts, PARAMS, start)
+    got = as_set(res)
+    assert len(got) == len(res.candidates), "a path pair was enumerated twice"
+    assert got == expected
+    assert res.complete
+    assert res.iterations >= len(got)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(5, 9),
+       turn=st.floats(0.6, math.pi / 2), wmin=st.floats(1.5, 3.0), wmax=st.floats(4.0, 7.0))
+def test_enumeration_is_complete_under_other_limits(seed, n, turn, wmin, wmax):
+    params = LaneParams(max_turn_angle_rad=turn, min_width_m=wmin, max_width_m=wmax)
+    pts = lane_instance(seed, n)
+    start = find_starting_vertices(pts, POSE, params.near_radius_m)
+    if start is None:
+        return
+    res = enumerate_candidates(pts, POSE, params, max_iterations=0)
+    assert as_set(res) == brute_force(pts, params, start)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(6, 9))
+def test_guide_orders_the_search_but_changes_no_candidate(seed, n):
+    pts = lane_instance(seed, n)
+    plain = enumerate_candidates(pts, POSE, PARAMS, max_iterations=0)
+    if len(plain.candidates) == 0:
+        return
+    # Guide with the last candidate found: it must come out first-in-depth, same set.
+    left, right, _ = plain.candidates[len(plain.candidates) - 1]
+    guided = enumerate_candidates(pts, POSE, PARAMS, max_iterations=0, guide=(left, right))
+    assert as_set(guided) == as_set(plain)
+    firsts = [(tuple(a.tolist()), tuple(b.tolist())) for a, b, _ in guided.candidates]
+    # Following the guide, the search reaches the guide lane before it backtracks.
+    assert firsts.index((tuple(left.tolist()), tuple(right.tolist()))) <= left.size + right.size
+
+
+def test_candidates_satisfy_the_shared_predicate_under_the_limit():
+    pts = lane_instance(7, 9)
+    pts = np.vstack([pts, pts + [25.0, 0.0]])  # a longer lane, so the limit bites
+    res = enumerate_candidates(pts, POSE, PARAMS, max_iterations=40)
+    assert res.iterations == 40 and not res.complete
+    assert len(res.candidates) > 0
+    for a, b, _ in res.candidates:
+        assert lane_is_feasible(pts[a], pts[b], PARAMS)
+
+
+def test_features_match_the_shared_definition():
+    pts = lane_instance(3, 9)
+    res = enumerate_candidates(pts, POSE, PARAMS, max_iterations=0)
+    assert res.features.shape == (len(res.candidates), 8)
+    for k, (a, b, closed) in enumerate(res.candidates):
+        np.testing.assert_allclose(res.features[k], ranking_features(pts[a], pts[b], closed),
+                                   rtol=1e-9, atol=1e-12)
+
+
+def test_straight_lane_is_found_whole():
+    xs = np.arange(0.0, 40.0, 4.0)
+    left = np.column_stack([xs, np.full_like(xs, 1.75)])
+    right = np.column_stack([xs + 1.0, np.full_like(xs, -1.75)])
+    pts = np.vstack([left, right])
+    lane = solve_lane(pts, (0.0, 0.0, 0.0), method="clc", ranker="longest")
+    assert lane.ok and lane.status is LaneStatus.OPTIMAL
+    assert lane.left.tolist() == list(range(10))
+    assert lane.right.tolist() == list(range(10, 20))
+    assert lane.stats["complete"] and lane.stats["method"] == "clc"
+
+
+def test_closed_circuit_is_closed():
+    t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    inner = np.column_stack([15 * np.cos(t), 15 * np.sin(t)])
+    outer = np.column_stack([18.5 * np.cos(t), 18.5 * np.sin(t)])
+    pts = np.vstack([outer, inner])
+    # At (16.75, 0) heading +y (counter-clockwise), the left side is the inner circle.
+    lane = solve_lane(pts, (16.75, 0.0, math.pi / 2), method="clc", ranker="longest")
+    assert lane.ok and lane.closed
+    assert sorted(lane.left.tolist()) == list(range(24, 48))
+    assert sorted(lane.right.tolist()) == list(range(24))
+    assert closable(search_graph(pts, PARAMS), lane.left, lane.right)
+
+
+def test_no_start_cone_is_not_found():
+    pts = np.array([[30.0, 2.0], [33.0, 2.0], [30.0, -2.0], [33.0, -2.0]])
+    lane = solve_lane(pts, (0.0, 0.0, 0.0), method="clc", ranker="longest")
+    assert not lane.ok and lane.status is LaneStatus.NOT_FOUND
+    assert "near" in lane.message or "of the car" in lane.message
+
+
+def test_too_narrow_start_is_not_found():
+    pts = np.array([[0.0, 0.5], [3.0, 0.5], [0.0, -0.5], [3.0, -0.5]])
+    lane = solve_lane(pts, (0.0, 0.0, 0.0), method="clc", ranker="longest")
+    assert not lane.ok and lane.status is LaneStatus.NOT_FOUND
+
+
+def test_warm_start_follows_the_previous_lane():
+    xs = np.arange(0.0, 60.0, 3.5)
+    left = np.column_stack([xs, np.full_like(xs, 1.75)])
+    right = np.column_stack([xs, np.full_like(xs, -1.75)])
+    pts = np.vstack([left, right])
+    params = LaneParams(max_iterations=60)
+    solver = LaneSolver(method="clc", params=params, ranker="longest")
+    first = solver.solve(pts, (0.0, 0.0, 0.0))
+    second = solver.solve(pts[::-1].copy(), (0.0, 0.0, 0.0))  # same map, shuffled indices
+    assert first.ok and second.ok
+    assert second.stats.get("warm_start_cones", 0) >= first.left.size + first.right.size - 1
+    n = pts.shape[0] - 1
+    np.testing.assert_array_equal(n - second.left[: first.left.size], first.left)
+
+
+def test_delaunay_graph_is_a_subgraph():
+    pts = lane_instance(11, 9)
+    radius = search_graph(pts, PARAMS, "radius")
+    tri = search_graph(pts, PARAMS, "delaunay")
+    r = {tuple(e) for e in radius.edges.tolist()}
+    assert {tuple(e) for e in tri.edges.tolist()} <= r
+    with pytest.raises(ValueError, match="unknown search graph"):
+        search_graph(pts, PARAMS, "knn")
+
+
+def test_clc_rejects_a_backend_and_others_reject_a_ranker():
+    pts = lane_instance(1, 8)
+    with pytest.raises(ValueError, match="no solver backends"):
+        LaneSolver(method="clc", backend="cpsat")
+    with pytest.raises(ValueError, match="takes no ranker"):
+        solve_lane(pts, POSE, method="rld", ranker="longest")
