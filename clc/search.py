@@ -26,7 +26,8 @@ from rld.constraints import candidate_edges, find_starting_vertices, lane_is_fea
 from rld.costs import ranking_features
 from rld.types import LaneParams, Pose
 
-__all__ = ["SearchGraph", "SearchResult", "CandidateList", "closable", "search_graph",
+__all__ = ["SearchGraph", "SearchResult", "CandidateList", "closable", "merge_results",
+           "search_graph",
            "enumerate_candidates", "GRAPHS"]
 
 #: Search-graph constructions: ``radius`` (IV-A, the paper's choice) and ``delaunay`` (IV-B).
@@ -184,6 +185,23 @@ def enumerate_candidates(
                                             for a, b in extra])
     return SearchResult(candidates=cands, features=features, iterations=int(iterations),
                         complete=bool(complete), start=(int(start[0]), int(start[1])), graph=g)
+
+
+def merge_results(a: SearchResult, b: SearchResult) -> SearchResult:
+    """The candidates of two searches from the same start vertices, ``a``'s first; iterations
+    add up and the result is complete when either search was."""
+    ca, cb = a.candidates, b.candidates
+    if not isinstance(ca, CandidateList) or not isinstance(cb, CandidateList):
+        raise TypeError("merge_results takes the results of enumerate_candidates")
+    lf = np.concatenate([ca._lf, cb._lf])
+    rf = np.concatenate([ca._rf, cb._rf])
+    lp = np.concatenate([ca._lp, ca._lp[-1] + cb._lp[1:]])
+    rp = np.concatenate([ca._rp, ca._rp[-1] + cb._rp[1:]])
+    closed = np.concatenate([ca._closed, cb._closed])
+    return SearchResult(candidates=CandidateList(lf, lp, rf, rp, closed),
+                        features=np.vstack([a.features, b.features]),
+                        iterations=a.iterations + b.iterations,
+                        complete=a.complete or b.complete, start=a.start, graph=a.graph)
 
 
 def closable(g: SearchGraph, left: np.ndarray, right: np.ndarray) -> bool:

@@ -25,7 +25,7 @@ class _NearestMethod:
     backends: tuple[str, ...] = ()
     rankers = False
 
-    def __init__(self, params: LaneParams, backend: str | None = None, **options) -> None:
+    def __init__(self, params: LaneParams, backend: str | None = None, ranker=None) -> None:
         self.params = params
 
     def solve(self, points, pose, colors=None, time_limit_s=None, confidence=None) -> Lane:
@@ -42,7 +42,7 @@ class _RldMethod:
     rankers = False
     sided = False
 
-    def __init__(self, params: LaneParams, backend: str | None = None, **options) -> None:
+    def __init__(self, params: LaneParams, backend: str | None = None, ranker=None) -> None:
         from rld.solver import RldModel
 
         self.model = RldModel(params, backend=backend, sided=self.sided)
@@ -132,7 +132,8 @@ class LaneSolver:
 
     ``backend`` selects an RLD solver backend; ``ranker`` a CLC ranker (``learned``,
     ``rld_cost``, ``longest`` or an object with ``score``); a method without backends or
-    rankers rejects them.
+    rankers rejects them. ``options``: further keyword arguments of the method's model, e.g.
+    ``{"warm_start": True, "graph": "delaunay"}`` for CLC (``clc.solver.ClcModel``).
     """
 
     def __init__(
@@ -141,6 +142,7 @@ class LaneSolver:
         params: LaneParams | None = None,
         backend: str | None = None,
         ranker: Any = None,
+        options: dict | None = None,
     ) -> None:
         self.method = _check_method(method)
         self.params = params if params is not None else LaneParams()
@@ -153,7 +155,11 @@ class LaneSolver:
             raise ValueError(f"method {method!r} takes no ranker (got {ranker!r})")
         self.backend = backend
         self.ranker = ranker
-        self._impl = kind(self.params, backend=backend, ranker=ranker)
+        try:
+            self._impl = kind(self.params, backend=backend, ranker=ranker, **(options or {}))
+        except TypeError as exc:
+            raise ValueError(f"method {method!r} does not take options {options!r}: {exc}") \
+                from exc
         self.previous: Lane | None = None
 
     def solve(

@@ -65,6 +65,7 @@ def run_protocol(
     time_limit_s: float | None = None,
     progress: bool = False,
     ranker=None,
+    options: dict | None = None,
 ) -> list[PoseRecord]:
     """Score ``method`` at every ``every``-th pose of each track's lap.
 
@@ -80,7 +81,8 @@ def run_protocol(
         bar = tqdm(total=None, desc=f"{method} R={range_m:g} FP={fp_rate:.0%}", unit="pose")
 
     def make() -> LaneSolver:
-        return LaneSolver(method=method, params=params, backend=backend, ranker=ranker)
+        return LaneSolver(method=method, params=params, backend=backend, ranker=ranker,
+                          options=options)
 
     for track in tracks:
         lap = simulate_lap(track, range_m=range_m, fp_rate=fp_rate, seed=seed)

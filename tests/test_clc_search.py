@@ -187,14 +187,19 @@ def test_warm_start_follows_the_previous_lane():
     left = np.column_stack([xs, np.full_like(xs, 1.75)])
     right = np.column_stack([xs, np.full_like(xs, -1.75)])
     pts = np.vstack([left, right])
-    params = LaneParams(max_iterations=60)
-    solver = LaneSolver(method="clc", params=params, ranker="longest")
+    params = LaneParams(max_iterations=100)  # half of it, 50, rebuilds the 36-cone lane
+    solver = LaneSolver(method="clc", params=params, ranker="longest",
+                        options={"warm_start": True})
     first = solver.solve(pts, (0.0, 0.0, 0.0))
-    second = solver.solve(pts[::-1].copy(), (0.0, 0.0, 0.0))  # same map, shuffled indices
-    assert first.ok and second.ok
-    assert second.stats.get("warm_start_cones", 0) >= first.left.size + first.right.size - 1
+    assert first.ok and first.left.tolist() == list(range(18))
+    moved = pts[::-1].copy()  # the same map, re-indexed
+    second = solver.solve(moved, (0.0, 0.0, 0.0))
+    assert second.ok and second.stats["warm_start_cones"] == 36
     n = pts.shape[0] - 1
-    np.testing.assert_array_equal(n - second.left[: first.left.size], first.left)
+    np.testing.assert_array_equal(n - second.left, first.left)
+    np.testing.assert_array_equal(n - second.right, first.right)
+    # Without a previous lane there is no guide.
+    assert "warm_start_cones" not in first.stats
 
 
 def test_delaunay_graph_is_a_subgraph():
@@ -205,6 +210,20 @@ def test_delaunay_graph_is_a_subgraph():
     assert {tuple(e) for e in tri.edges.tolist()} <= r
     with pytest.raises(ValueError, match="unknown search graph"):
         search_graph(pts, PARAMS, "knn")
+
+
+def test_options_reach_the_model_and_bad_ones_are_refused():
+    pts = lane_instance(2, 9)
+    lane = solve_lane(pts, POSE, method="clc", ranker="longest")
+    solver = LaneSolver(method="clc", ranker="longest", options={"graph": "delaunay"})
+    tri = solver.solve(pts, POSE)
+    assert tri.stats["graph"] == "delaunay" and lane.stats["graph"] == "radius"
+    with pytest.raises(ValueError, match="unknown search graph"):
+        LaneSolver(method="clc", options={"graph": "knn"})
+    with pytest.raises(ValueError, match="does not take options"):
+        LaneSolver(method="clc", options={"colour": True})
+    with pytest.raises(ValueError, match="does not take options"):
+        LaneSolver(method="rld", options={"warm_start": True})
 
 
 def test_clc_rejects_a_backend_and_others_reject_a_ranker():
