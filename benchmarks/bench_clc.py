@@ -70,7 +70,8 @@ def to_markdown(rows: list[dict]) -> str:
 def run_iterations(it_maxes=(250, 500, 1000, 2500, 5000), fp_rate: float = 0.3,
                    range_m: float = 50.0, every: int = 8, ranker=None,
                    progress: bool = True) -> list[dict]:
-    """Latency against it_max, and (at the default it_max) against the map size."""
+    """Latency, critical failures and completeness against it_max, and (at the default it_max)
+    latency against the map size."""
     tracks = _tracks()
     _warm_up(ranker)
     rows = []
@@ -83,7 +84,7 @@ def run_iterations(it_maxes=(250, 500, 1000, 2500, 5000), fp_rate: float = 0.3,
                      "p95_ms": float(np.percentile(lat, 95)),
                      "critical": summarize(recs)["critical"],
                      "complete": summarize(recs).get("complete", 0.0)})
-        if it == 2500:
+        if it == LaneParams().max_iterations:
             cones = np.array([r.n_cones for r in recs])
             edges = [0, 50, 100, 150, 200, 300, 10_000]
             for lo, hi in zip(edges[:-1], edges[1:], strict=True):

@@ -159,6 +159,7 @@ def train_ranker(n_generated: int, train_tracks: str, fp_rates: str, ranges: str
     from clc.ranker import DEFAULT_MODEL, LearnedRanker, LongestRanker
     from rld.generator import generate_track
     from rld.tracks import DATASET_TRACKS, find_dataset_dir, load_dataset_track
+    from rld.types import LaneParams
 
     fps = [float(v) for v in fp_rates.split(",")]
     rs = [float(v) for v in ranges.split(",")]
@@ -183,6 +184,7 @@ def train_ranker(n_generated: int, train_tracks: str, fp_rates: str, ranges: str
                           "dataset_tracks": [t.name for t in tracks if t.name.startswith("track")],
                           "held_out_tracks": [t.name for t in held], "fp_rates": fps,
                           "ranges_m": rs, "every_kth_pose": every, "lists": len(lists),
+                          "max_iterations": LaneParams().max_iterations,
                           "candidates": int(sum(cl.iou.size for cl in lists))},
         "hyper_parameters": {"epochs": epochs, "lr": 0.008, "batch_size": 8192,
                              "wrong_cone_penalty": 0.03,
