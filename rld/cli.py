@@ -199,6 +199,68 @@ def train_ranker(n_generated: int, train_tracks: str, fp_rates: str, ranges: str
     click.echo(f"mean IoU of the top pick: {scores}")
 
 
+@main.command("eval")
+@click.argument("dataset", required=False, type=click.Path(file_okay=False))
+@click.option("--methods", default="rld,clc", show_default=True,
+              help="Comma-separated method specs: name or name:option (rld:highs, clc:longest).")
+@click.option("--tracks", "track_ids", default=None,
+              help="Dataset track numbers (default: all the dataset has).")
+@click.option("--generated", "n_generated", default=0, show_default=True,
+              help="Also this many generated tracks (seeds 0, 1, ...).")
+@click.option("--ranges", default="30,50", show_default=True, help="Perception ranges, metres.")
+@click.option("--fp-rates", default="0,0.1,0.3,0.5", show_default=True)
+@click.option("--every", default=1, show_default=True, help="Every k-th pose of each lap.")
+@click.option("--seed", default=0, show_default=True, help="Seed of the false positives.")
+@click.option("--processes", default=None, type=int, help="Workers (default: CPU count).")
+@click.option("--out", default="eval_out", show_default=True, help="Output folder.")
+@click.option("--plot-failures", is_flag=True, help="Draw every critical failure.")
+@click.option("--results", "results_page", default=None,
+              help="Also write the results page (docs/results.md) here.")
+def eval_cmd(dataset: str | None, methods: str, track_ids: str | None, n_generated: int,
+             ranges: str, fp_rates: str, every: int, seed: int, processes: int | None, out: str,
+             plot_failures: bool, results_page: str | None) -> None:
+    """Run the evaluation protocol (DESIGN.md) and write records, tables and plots."""
+    import datetime
+    import shlex
+    from pathlib import Path
+
+    from rld import report
+    from rld.generator import generate_track
+    from rld.tracks import DATASET_TRACKS, find_dataset_dir, load_dataset_track
+
+    try:
+        specs = [report.parse_method(m) for m in methods.split(",") if m.strip()]
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="--methods") from exc
+    folder = Path(dataset) if dataset else find_dataset_dir()
+    tracks = []
+    if folder is not None and (track_ids or n_generated == 0):
+        ids = [int(v) for v in track_ids.split(",")] if track_ids else list(DATASET_TRACKS)
+        try:
+            tracks += [load_dataset_track(folder, k) for k in ids]
+        except FileNotFoundError as exc:
+            raise click.ClickException(str(exc)) from exc
+    tracks += [generate_track(s) for s in range(n_generated)]
+    if not tracks:
+        raise click.ClickException("no tracks: give a dataset folder (or put the dataset in "
+                                   "../shared/data/...) or --generated N")
+    records = report.evaluate(
+        tracks, specs, ranges=[float(v) for v in ranges.split(",")],
+        fp_rates=[float(v) for v in fp_rates.split(",")], every=every, seed=seed,
+        processes=processes, plot_failures=str(Path(out) / "failures") if plot_failures else None)
+    command = "rld eval " + " ".join(shlex.quote(a) for a in sys.argv[2:])
+    header = (f"Command: `{command}`. Machine: {report.machine()}. "
+              f"Date: {datetime.date.today().isoformat()}. Tracks: "
+              f"{', '.join(t.name for t in tracks)}.")
+    paths = report.write_outputs(records, out, header=header)
+    click.echo(paths["results"].read_text())
+    click.echo(f"wrote {out}/: poses.jsonl, summary.json, results.md, "
+               + ", ".join(p.name for p in paths["plots"]))
+    if results_page:
+        Path(results_page).write_text(report.results_page(paths["rows"], header))
+        click.echo(f"wrote {results_page}")
+
+
 @main.group()
 def bench() -> None:
     """Run the benchmarks of benchmarks/ (from a checkout) and print their tables."""

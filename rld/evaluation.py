@@ -66,11 +66,15 @@ def run_protocol(
     progress: bool = False,
     ranker=None,
     options: dict | None = None,
+    label: str | None = None,
+    plot_failures: str | None = None,
 ) -> list[PoseRecord]:
     """Score ``method`` at every ``every``-th pose of each track's lap.
 
     ``stateful`` keeps one ``LaneSolver`` per lap (warm starts, as on the car); otherwise each
     pose gets a fresh solver (the stateless ``solve_lane``). Latency is the whole call.
+    ``label`` names the method in the records (default: ``method``); ``plot_failures``, a
+    folder, gets a picture of every critical failure (strict rule).
     """
     records: list[PoseRecord] = []
     tracks = list(tracks)
@@ -95,7 +99,8 @@ def run_protocol(
             latency = time.perf_counter() - t0
             sc = score_lane(frame, lane.left, lane.right, lane.ok, lane.closed)
             records.append(PoseRecord(
-                track=track.name, pose=k, range_m=range_m, fp_rate=fp_rate, method=method,
+                track=track.name, pose=k, range_m=range_m, fp_rate=fp_rate,
+                method=label or method,
                 status=lane.status.name, category=sc.category,
                 category_tolerant=sc.category_tolerant, iou=sc.iou, iou20=sc.iou20,
                 divergence_m=sc.divergence_m, pred_length_m=sc.pred_length_m,
@@ -104,11 +109,29 @@ def run_protocol(
                 iterations=int(lane.stats.get("iterations", -1)),
                 complete=lane.stats.get("complete"),
             ))
+            if plot_failures and sc.critical:
+                _plot_failure(plot_failures, label or method, track.name, frame, lane, sc,
+                              range_m, fp_rate)
             if bar is not None:
                 bar.update(1)
     if bar is not None:
         bar.close()
     return records
+
+
+def _plot_failure(folder, method, track, frame, lane, sc, range_m, fp_rate) -> None:
+    from pathlib import Path
+
+    from rld.plotting import plot_scene
+
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    name = (f"{method}_{track}_R{range_m:g}_fp{round(100 * fp_rate)}_pose{frame.index}"
+            .replace(" ", "").replace(":", "-"))
+    plot_scene(frame.cones, lane=lane, pose=frame.pose, gt_left=frame.gt_left,
+               gt_right=frame.gt_right, false_positive=frame.is_false_positive,
+               title=f"{method}, {track}, R {range_m:g} m, FP {fp_rate:.0%}, pose {frame.index}: "
+                     f"{sc.category}, diverges at {sc.divergence_m:.1f} m",
+               path=str(Path(folder) / f"{name}.png"))
 
 
 def summarize(records: list[PoseRecord]) -> dict:
