@@ -310,8 +310,9 @@ def circle_crossing(line: np.ndarray, center: np.ndarray, radius_m: float) -> np
         t2 = (-b + math.sqrt(disc)) / (2 * a)
         # The segment is inside the circle for t in (t1, t2); it leaves at t2 if that is on
         # the segment and some part of the segment before it is inside.
-        if 0.0 < t2 <= 1.0 and max(t1, 0.0) < t2:
-            return line[i] + t2 * u
+        # (t2 may exceed 1 by a rounding error when the segment ends on the circle.)
+        if 0.0 < t2 <= 1.0 + 1e-12 and max(t1, 0.0) < t2:
+            return line[i] + min(t2, 1.0) * u
     return None
 
 

@@ -726,3 +726,11 @@ def test_stability_ratio_nan_cases():
     moved = np.array([(0, 1), (20, 1)], float)
     assert math.isnan(stability_ratio(long, moved, c, 10.0, 0.0))
     assert math.isnan(stability_ratio(long, moved, c, 10.0, -1.0))
+
+
+def test_circle_crossing_at_a_segment_end():
+    # Found by hypothesis: the segment ends exactly on the circle; rounding put the exit at
+    # t = 1 + 1e-16 and it was missed.
+    line = np.array([[0.0, -16.212230297207142], [0.0, 1.0]])
+    p = circle_crossing(line, np.zeros(2), 1.0)
+    assert p is not None and p == pytest.approx([0.0, 1.0], abs=1e-9)
