@@ -257,8 +257,16 @@ def eval_cmd(dataset: str | None, methods: str, track_ids: str | None, n_generat
     click.echo(f"wrote {out}/: poses.jsonl, summary.json, results.md, "
                + ", ".join(p.name for p in paths["plots"]))
     if results_page:
-        Path(results_page).write_text(report.results_page(paths["rows"], header))
-        click.echo(f"wrote {results_page}")
+        import shutil
+
+        page = Path(results_page)
+        images = []
+        for plot in paths["plots"]:
+            target = page.parent / f"{page.stem}_{plot.name}"
+            shutil.copyfile(plot, target)
+            images.append(target.name)
+        page.write_text(report.results_page(paths["rows"], header, images))
+        click.echo(f"wrote {results_page} and its images")
 
 
 @main.group()

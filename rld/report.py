@@ -267,9 +267,9 @@ different thing (its quality checks on a 12-cone window), see docs/benchmarks.md
 """
 
 
-def results_page(rows: list[dict], header: str) -> str:
-    """docs/results.md: our Table I analogue per method and range, beside the papers' figures.
-    Regenerate with the command in its first line."""
+def results_page(rows: list[dict], header: str, images: Sequence[str] = ()) -> str:
+    """docs/results.md: our Table I analogue per method and range, beside the papers' figures,
+    and the given images (paths relative to the page). Regenerate with the command it names."""
     return "\n".join([
         "# Results on the shared tracks",
         "",
@@ -279,6 +279,8 @@ def results_page(rows: list[dict], header: str) -> str:
         header,
         "",
         "## Ours",
+        "",
+        *[f"![{Path(i).stem}]({i})" for i in images],
         "",
         table_markdown(rows),
         "## The papers' figures",
