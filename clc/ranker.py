@@ -15,6 +15,7 @@ one score per candidate, higher is better:
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, Protocol
@@ -30,12 +31,23 @@ __all__ = ["Ranker", "LongestRanker", "RldCostRanker", "LearnedRanker", "get_ran
 #: Where ``rld train-ranker`` writes the learned ranker and ``LearnedRanker.load`` reads it.
 DEFAULT_MODEL = Path(__file__).resolve().parent / "models" / "clc_ranker.npz"
 RANKERS = ("learned", "rld_cost", "longest")
+#: The arrays of a learned ranker's ``.npz`` (``clc.train.save_ranker`` writes them).
+_ARRAYS = ("W1", "b1", "w2", "b2", "mean", "std", "feature_names")
 
 
 class Ranker(Protocol):
+    """What CLC needs of a ranker: a ``name`` and ``score``.
+
+    ``score(points, pose, params, candidates, features)``: ``points`` (N, 2) cone positions (m),
+    ``pose`` the car's ``Pose``, ``params`` the ``LaneParams`` of the search, ``candidates`` a
+    sequence of ``(left_idx, right_idx, closed)`` (int64 index arrays into ``points``) and
+    ``features`` (K, 8) float64, row k the ``rld.costs.ranking_features`` of candidate k.
+    Returns (K,) float64 scores, higher is better (CLC section VII picks the argmax).
+    """
+
     name: str
 
-    def score(self, points: np.ndarray, pose: Pose, params: LaneParams,
+    def score(self, points: np.ndarray | None, pose: Pose | None, params: LaneParams | None,
               candidates: Sequence, features: np.ndarray) -> np.ndarray: ...
 
 
@@ -44,7 +56,8 @@ class LongestRanker:
 
     name = "longest"
 
-    def score(self, points, pose, params, candidates, features) -> np.ndarray:
+    def score(self, points: np.ndarray | None, pose: Pose | None, params: LaneParams | None,
+              candidates: Sequence, features: np.ndarray) -> np.ndarray:
         f = np.asarray(features, dtype=np.float64).reshape(-1, len(FEATURE_NAMES))
         return f[:, 0] + 1e-6 * (f[:, 1] + f[:, 2])
 
@@ -54,7 +67,8 @@ class RldCostRanker:
 
     name = "rld_cost"
 
-    def score(self, points, pose, params, candidates, features) -> np.ndarray:
+    def score(self, points: np.ndarray | None, pose: Pose | None, params: LaneParams | None,
+              candidates: Sequence, features: np.ndarray) -> np.ndarray:
         return np.array([-lane_cost(points, a, b, pose, params, closed=c)
                          for a, b, c in candidates], dtype=np.float64)
 
@@ -73,14 +87,21 @@ class LearnedRanker:
         self.mean = np.asarray(mean, dtype=np.float64)
         self.std = np.asarray(std, dtype=np.float64)
         nf = len(FEATURE_NAMES)
-        h = self.b1.shape[0] if self.b1.ndim == 1 else -1
+        if self.b1.ndim != 1 or self.b1.shape[0] < 1:
+            raise ValueError(f"ranker weights: b1 has shape {self.b1.shape}, expected (hidden,)")
+        h = self.b1.shape[0]
         shapes = {"W1": (self.W1.shape, (nf, h)), "w2": (self.w2.shape, (h,)),
                   "mean": (self.mean.shape, (nf,)), "std": (self.std.shape, (nf,))}
         for name, (got, want) in shapes.items():
-            if h < 1 or got != want:
+            if got != want:
                 raise ValueError(f"ranker weights: {name} has shape {got}, expected {want}")
         if not np.all(self.std > 0):
             raise ValueError("ranker weights: std must be positive")
+        for name in ("W1", "b1", "w2", "mean", "std"):
+            if not np.all(np.isfinite(getattr(self, name))):
+                raise ValueError(f"ranker weights: {name} is not finite")
+        if not math.isfinite(self.b2):
+            raise ValueError("ranker weights: b2 is not finite")
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> LearnedRanker:
@@ -91,16 +112,24 @@ class LearnedRanker:
                 f"no learned CLC ranker at {path}: train one with `rld train-ranker` "
                 "(needs the train extra), or use ranker='longest'")
         with np.load(path, allow_pickle=False) as z:
-            names = tuple(str(v) for v in z["feature_names"])
+            missing = [k for k in _ARRAYS if k not in z.files]
+            if missing:
+                raise ValueError(f"ranker weights {path}: missing arrays {missing}")
+            names = tuple(str(v) for v in np.atleast_1d(z["feature_names"]))
             if names != FEATURE_NAMES:
                 raise ValueError(f"ranker features {names} differ from {FEATURE_NAMES}")
-            return cls(z["W1"], z["b1"], z["w2"], float(z["b2"]), z["mean"], z["std"])
+            b2 = np.asarray(z["b2"], dtype=np.float64)
+            if b2.shape != ():
+                raise ValueError(f"ranker weights: b2 has shape {b2.shape}, expected ()")
+            return cls(z["W1"], z["b1"], z["w2"], float(b2), z["mean"], z["std"])
 
     def net(self, features: np.ndarray) -> np.ndarray:
+        """Net(x) of section VII for every row of ``features`` (K, 8): (K,) float64."""
         z = (np.asarray(features, dtype=np.float64) - self.mean) / self.std
         return np.maximum(z @ self.W1 + self.b1, 0.0) @ self.w2 + self.b2
 
-    def score(self, points, pose, params, candidates, features) -> np.ndarray:
+    def score(self, points: np.ndarray | None, pose: Pose | None, params: LaneParams | None,
+              candidates: Sequence, features: np.ndarray) -> np.ndarray:
         return self.net(np.asarray(features).reshape(-1, len(FEATURE_NAMES)))
 
 

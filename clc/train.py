@@ -23,19 +23,20 @@ import platform
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import shapely
 
-from clc.search import enumerate_candidates
 from rld.costs import FEATURE_NAMES
 from rld.geometry import lane_polygon
-from rld.simulation import simulate_lap
-from rld.tracks import Track
 from rld.types import LaneParams
 
+if TYPE_CHECKING:
+    from rld.tracks import Track
+
 __all__ = ["RankingList", "collect", "pairwise_dataset", "train_ranker", "save_ranker",
-           "top_pick_iou"]
+           "top_pick_iou", "heldout_mean_best_iou"]
 
 
 @dataclass
@@ -57,6 +58,29 @@ class RankingList:
             self.target = self.iou
 
 
+def _as_lists(lists) -> list[RankingList]:
+    """``RankingList``s as they are; ``(features (K, 8), ious (K,))`` pairs wrapped in one
+    (the IoU is then the target), with the shapes checked."""
+    out = []
+    for k, cl in enumerate(lists):
+        if not isinstance(cl, RankingList):
+            features, iou = cl
+            cl = RankingList(np.asarray(features, dtype=np.float64),
+                             np.asarray(iou, dtype=np.float64), "", k, float("nan"),
+                             float("nan"))
+        nf = len(FEATURE_NAMES)
+        if cl.features.ndim != 2 or cl.features.shape[1] != nf:
+            raise ValueError(f"list {k}: features have shape {cl.features.shape}, "
+                             f"expected (K, {nf})")
+        if cl.features.shape[0] == 0:
+            raise ValueError(f"list {k} has no candidates")
+        if cl.iou.shape != (cl.features.shape[0],) or cl.target.shape != cl.iou.shape:
+            raise ValueError(f"list {k}: {cl.features.shape[0]} candidates but IoUs of shape "
+                             f"{cl.iou.shape} and targets of shape {cl.target.shape}")
+        out.append(cl)
+    return out
+
+
 def _ious(points, cands, gt_poly) -> np.ndarray:
     polys = [lane_polygon(points[a], points[b], closed=c) for a, b, c in cands]
     inter = shapely.area(shapely.intersection(polys, gt_poly))
@@ -70,6 +94,9 @@ def collect(tracks: Iterable[Track], fp_rates=(0.0, 0.1, 0.3), ranges=(50.0,), e
     """Candidate lists over the protocol's partial maps (see the module docstring). Lists keep
     at most ``max_per_list`` candidates: the 8 longest and a seeded sample of the rest."""
     from tqdm import tqdm
+
+    from clc.search import enumerate_candidates
+    from rld.simulation import simulate_lap
 
     params = params or LaneParams()
     rng = np.random.default_rng(seed)
@@ -111,16 +138,21 @@ def collect(tracks: Iterable[Track], fp_rates=(0.0, 0.1, 0.3), ranges=(50.0,), e
     return out
 
 
-def pairwise_dataset(lists: list[RankingList], lambda_iou: float = 20.0,
-                     pairs_per_list: int = 256, seed: int = 0):
+def pairwise_dataset(lists: list[RankingList] | list[tuple[np.ndarray, np.ndarray]],
+                     lambda_iou: float = 20.0, pairs_per_list: int = 256,
+                     seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Ordered candidate pairs within each list, ``(x1 (P, 8), x2 (P, 8), p_gt (P,))`` with
     p_gt = sigmoid(lambda_iou (t_1 - t_2)) (CLC eq. 14 with the targets t in place of the
-    IoUs). Pairs are a seeded sample of ``pairs_per_list`` per list, skipping equal targets."""
+    IoUs; for ``(features, ious)`` pairs the targets are the IoUs). Pairs are a seeded sample
+    (with replacement) of ``pairs_per_list`` index pairs per list, dropping those with equal
+    targets (hence every pair with i == j); lists of fewer than two candidates give none."""
     rng = np.random.default_rng(seed)
     x1, x2, p = [], [], []
-    for cl in lists:
+    for cl in _as_lists(lists):
         t = cl.target
         n = t.size
+        if n < 2:
+            continue
         i = rng.integers(0, n, size=pairs_per_list)
         j = rng.integers(0, n, size=pairs_per_list)
         ok = t[i] != t[j]
@@ -128,26 +160,30 @@ def pairwise_dataset(lists: list[RankingList], lambda_iou: float = 20.0,
         x1.append(cl.features[i])
         x2.append(cl.features[j])
         p.append(1.0 / (1.0 + np.exp(-lambda_iou * (t[i] - t[j]))))
-    if not p:
+    if sum(v.size for v in p) == 0:
         raise ValueError("no training pairs: every list has equal IoUs")
     return np.vstack(x1), np.vstack(x2), np.concatenate(p)
 
 
 def _standardiser(lists: list[RankingList]) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and standard deviation of the training features (std 1 for a constant feature)."""
     f = np.vstack([cl.features for cl in lists])
     mean = f.mean(axis=0)
     std = f.std(axis=0)
     return mean, np.where(std > 1e-9, std, 1.0)
 
 
-def train_ranker(lists: list[RankingList], seed: int = 0, epochs: int = 200, lr: float = 0.008,
-                 batch_size: int = 8192, lambda_iou: float = 20.0, hidden: int = 100,
+def train_ranker(lists: list[RankingList] | list[tuple[np.ndarray, np.ndarray]], seed: int = 0,
+                 epochs: int = 200, lr: float = 0.008, batch_size: int = 8192,
+                 lambda_iou: float = 20.0, hidden: int = 100,
                  progress: bool = True) -> dict[str, np.ndarray]:
-    """Fit the 8-100-1 RankNet (section VII; the paper: Adam, lr 0.008, batch 8192, 200 epochs).
-    Returns the arrays ``LearnedRanker`` reads."""
+    """Fit the 8-100-1 RankNet (section VII; the paper: Adam, lr 0.008, batch 8192, 200 epochs)
+    with binary cross-entropy on sigmoid(Net(x_1) - Net(x_2)) against p_GT (eq. 14). Returns
+    the arrays ``LearnedRanker`` reads (``save_ranker`` writes them)."""
     import torch
     from tqdm import tqdm
 
+    lists = _as_lists(lists)
     torch.manual_seed(seed)
     mean, std = _standardiser(lists)
     x1, x2, p = pairwise_dataset(lists, lambda_iou=lambda_iou, seed=seed)
@@ -180,10 +216,27 @@ def train_ranker(lists: list[RankingList], seed: int = 0, epochs: int = 200, lr:
     }
 
 
-def top_pick_iou(ranker, lists: list[RankingList]) -> dict[str, float]:
+def heldout_mean_best_iou(ranker: Any,
+                          lists: list[RankingList] | list[tuple[np.ndarray, np.ndarray]]
+                          ) -> tuple[float, float]:
+    """``(mean IoU of the top-scored candidate, mean best IoU)`` over the lists: the ranker's
+    accuracy and the oracle's (the ceiling the enumeration allows), the two numbers a model
+    card reports (CLC section VII; ``top_pick_iou`` gives them with more)."""
+    out = top_pick_iou(ranker, lists)
+    return out["mean_iou_top"], out["mean_iou_oracle"]
+
+
+def top_pick_iou(ranker: Any,
+                 lists: list[RankingList] | list[tuple[np.ndarray, np.ndarray]]
+                 ) -> dict[str, float]:
     """Mean IoU of the top-scored candidate per list, beside the oracle (best IoU per list)
     and the longest-lane heuristic: what a ranker card reports (the paper: 94.8 % held out,
-    oracle 97.8 %)."""
+    oracle 97.8 %). Scores come from ``ranker.score(None, None, None, [None] * K, features)``
+    (rankers that need the cones, such as ``rld_cost``, do not fit here); ties go to the
+    first candidate."""
+    lists = _as_lists(lists)
+    if not lists:
+        raise ValueError("no lists to score")
     picked, oracle, longest, exact = [], [], [], []
     for cl in lists:
         s = ranker.score(None, None, None, [None] * cl.iou.size, cl.features)
@@ -199,12 +252,20 @@ def top_pick_iou(ranker, lists: list[RankingList]) -> dict[str, float]:
 
 
 def save_ranker(arrays: dict[str, np.ndarray], path: str | Path, card: dict) -> Path:
-    """Write the weights (``.npz``) and a JSON card with the same stem beside them."""
+    """Write the weights (``.npz``) and a JSON card with the same stem beside them: the model,
+    the feature names, the layer sizes and the Python version, then whatever ``card`` holds
+    (training data, seed, hyper-parameters, held-out scores; its keys win). Returns the path of
+    the ``.npz`` (``.npz`` is appended to a path without it, as ``numpy.savez`` does)."""
     path = Path(path)
+    if path.suffix != ".npz":  # where np.savez would put it
+        path = path.with_name(path.name + ".npz")
     path.parent.mkdir(parents=True, exist_ok=True)
     np.savez(path, **arrays)
+    W1 = np.asarray(arrays["W1"])
     full = {"model": "RankNet 8-100-1 ReLU (CLC section VII)",
-            "features": list(FEATURE_NAMES), "python": platform.python_version(), **card}
+            "features": list(FEATURE_NAMES),
+            "layers": [int(W1.shape[0]), int(W1.shape[1]), 1] if W1.ndim == 2 else None,
+            "python": platform.python_version(), **card}
     path.with_suffix(".json").write_text(json.dumps(full, indent=2, default=_jsonable) + "\n")
     return path
 
@@ -212,6 +273,8 @@ def save_ranker(arrays: dict[str, np.ndarray], path: str | Path, card: dict) -> 
 def _jsonable(v):
     if isinstance(v, np.generic):
         return v.item()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
     if isinstance(v, float) and math.isnan(v):
         return None
     raise TypeError(f"not JSON: {type(v)}")

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from rld import costs_kernels as ck
 from rld import geometry as geo
+from rld.constraints import lane_widths
 from rld.types import LaneParams, Pose
 
 __all__ = [
@@ -140,30 +142,22 @@ def lane_cost(
     return total
 
 
-def _population_var(x: np.ndarray) -> float:
-    return float(np.var(x)) if x.size >= 2 else 0.0
-
-
 def ranking_features(left_xy: np.ndarray, right_xy: np.ndarray, closed: bool = False) -> np.ndarray:
     """The 8 features of CLC section VII for one lane, (8,) float64 in ``FEATURE_NAMES`` order:
-    lane length (mean of the two boundary lengths, m), cones on the left and on the right,
-    the variance of the lane width (of all matching-line lengths W(L, R), CLC eq. 12, m^2),
-    the variance of the segment lengths of each boundary (m^2) and of the signed turn angles
-    between consecutive segments of each boundary (rad^2). Variances are population variances,
-    0 for fewer than two values. A closed lane counts its closing segments and the turns at
-    the wrap. The CLC search keeps the same numbers incrementally (``clc.search_kernels``)."""
-    from rld.constraints import lane_widths
-
-    L = np.asarray(left_xy, dtype=np.float64).reshape(-1, 2)
-    R = np.asarray(right_xy, dtype=np.float64).reshape(-1, 2)
-    out = np.zeros(8)
-    for k, xy in enumerate((L, R)):
-        ring = np.vstack([xy, xy[:1]]) if closed and xy.shape[0] > 1 else xy
-        seg = np.hypot(*np.diff(ring, axis=0).T) if ring.shape[0] > 1 else np.zeros(0)
-        out[0] += 0.5 * float(seg.sum())
-        out[1 + k] = xy.shape[0]
-        out[4 + k] = _population_var(seg)
-        turns = geo.polyline_turn_angles(xy, closed=closed and xy.shape[0] >= 3)
-        out[6 + k] = _population_var(turns)
-    out[3] = _population_var(lane_widths(L, R, closed))
+    lane length (mean of the two boundary lengths, CLC eq. 7, m), cones on the left and on the
+    right, the variance of the lane width (of all matching-line lengths W(L, R), CLC eq. 12,
+    m^2), the variance of the segment lengths of each boundary (m^2) and of the signed turn
+    angles between consecutive segments of each boundary (rad^2). Variances are population
+    variances, 0 for fewer than two values. A closed lane counts its closing segments and the
+    turns at the wrap. ``left_xy`` and ``right_xy``: (n, 2) and (m, 2) boundary points ordered
+    from the car forward, metres. The numbers come from the kernels of ``rld.costs_kernels``;
+    the CLC search keeps the same numbers incrementally (``clc.search_kernels``)."""
+    L = np.ascontiguousarray(np.asarray(left_xy, dtype=np.float64).reshape(-1, 2))
+    R = np.ascontiguousarray(np.asarray(right_xy, dtype=np.float64).reshape(-1, 2))
+    widths = np.ascontiguousarray(lane_widths(L, R, closed), dtype=np.float64)
+    out = np.zeros(ck.N_FEATURES)
+    if closed:
+        ck.closed_lane_features(L, R, widths, out)
+    else:
+        ck.lane_features(L, R, widths, out)
     return out
