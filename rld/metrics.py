@@ -32,6 +32,8 @@ __all__ = [
     "score_lane",
     "circle_crossing",
     "stability_ratio",
+    "side_agreement",
+    "lanes_agree",
 ]
 
 CATEGORIES = ("gt", "near_gt", "too_short", "diverging_ge20", "diverging_lt20", "failed")
@@ -335,3 +337,46 @@ def stability_ratio(
     if p0 is None or p1 is None:
         return math.nan
     return float(np.hypot(*(p0 - p1)) / travelled_m)
+
+
+def side_agreement(a: np.ndarray, b: np.ndarray) -> int:
+    """How many cones two boundaries (index sequences into the same map, from the car forward)
+    share over their common horizon, or -1 where they contradict each other there.
+
+    The common horizon starts where the later of the two starts: when ``b[0]`` lies in ``a``,
+    ``a`` is cut to begin there, else when ``a[0]`` lies in ``b``, ``b`` is (methods differ in
+    where a boundary starts: RLD may keep a cone up to ``window_behind_m`` behind the car, CLC
+    starts at the cones nearest the car). It ends where the shorter of the two ends: a lane that
+    stops earlier (RLD's cone window) does not contradict one that goes on. Within it the two
+    sequences must be equal. Returns the length of the common part (>= 1), or -1 when neither
+    start lies in the other boundary or the common parts differ."""
+    a = [int(v) for v in np.asarray(a).ravel()]
+    b = [int(v) for v in np.asarray(b).ravel()]
+    if not a or not b:
+        return -1
+    if b[0] in a:
+        a = a[a.index(b[0]):]
+    elif a[0] in b:
+        b = b[b.index(a[0]):]
+    else:
+        return -1
+    n = min(len(a), len(b))
+    return n if a[:n] == b[:n] else -1
+
+
+def lanes_agree(lane_a, lane_b, min_common: int = 2) -> bool:
+    """Whether two ``Lane``\\ s (or ``(left, right)`` index pairs; ``None`` for no lane) on the
+    same map give the same boundaries over their common horizon (``side_agreement``), with at
+    least ``min_common`` shared cones on each side. Two methods that both find no lane agree;
+    one lane against none does not."""
+    def sides(lane):
+        if lane is None or (hasattr(lane, "ok") and not lane.ok):
+            return None
+        if hasattr(lane, "left"):
+            return lane.left, lane.right
+        return lane
+
+    sa, sb = sides(lane_a), sides(lane_b)
+    if sa is None or sb is None:
+        return sa is None and sb is None
+    return all(side_agreement(x, y) >= min_common for x, y in zip(sa, sb, strict=True))

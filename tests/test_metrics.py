@@ -22,7 +22,9 @@ from rld.metrics import (
     circle_crossing,
     lane_iou,
     lane_iou20,
+    lanes_agree,
     score_lane,
+    side_agreement,
     side_divergence,
     stability_ratio,
     truncate_polyline,
@@ -734,3 +736,46 @@ def test_circle_crossing_at_a_segment_end():
     line = np.array([[0.0, -16.212230297207142], [0.0, 1.0]])
     p = circle_crossing(line, np.zeros(2), 1.0)
     assert p is not None and p == pytest.approx([0.0, 1.0], abs=1e-9)
+
+
+# --- agreement of two lanes over their common horizon (the RLD-CLC agreement tests) ---------
+
+
+@pytest.mark.parametrize(
+    ("a", "b", "expected"),
+    [
+        ([1, 2, 3], [1, 2, 3], 3),  # identical
+        ([1, 2, 3, 4, 5], [1, 2, 3], 3),  # one stops earlier
+        ([0, 1, 2, 3], [1, 2, 3, 4], 3),  # one starts a cone earlier, the other goes on
+        ([1, 2, 3], [0, 1, 2], 2),  # b starts earlier: cut b at a's start
+        ([1, 2, 9], [1, 2, 3], -1),  # a different third cone
+        ([5, 6, 7], [1, 2, 3], -1),  # nothing in common
+        ([1, 3, 2], [1, 2, 3], -1),  # same cones, other order
+        ([], [1, 2], -1),
+    ],
+)
+def test_side_agreement_hand_worked(a, b, expected):
+    assert side_agreement(np.array(a), np.array(b)) == expected
+    # Symmetric in its arguments.
+    assert side_agreement(np.array(b), np.array(a)) == expected
+
+
+@given(st.lists(st.integers(0, 30), min_size=1, max_size=12, unique=True),
+       st.integers(0, 11), st.integers(0, 11))
+def test_side_agreement_of_two_windows_of_one_sequence(seq, i, j):
+    # Two windows of one sequence that overlap agree over exactly their overlap.
+    i, j = min(i, len(seq) - 1), min(j, len(seq) - 1)
+    a, b = np.array(seq[i:]), np.array(seq[j:j + 3])
+    lo, hi = max(i, j), min(len(seq), j + 3)
+    expected = hi - lo if hi > lo else -1
+    assert side_agreement(a, b) == expected
+
+
+def test_lanes_agree_needs_both_sides_and_counts_no_lane():
+    left, right = np.array([1, 2, 3]), np.array([4, 5, 6])
+    assert lanes_agree((left, right), (left[:2], right))
+    assert not lanes_agree((left, right), (left, np.array([4, 7, 6])))
+    assert not lanes_agree((left, right), (left[:1], right))  # one shared cone is too few
+    assert lanes_agree((left, right), (left[:1], right), min_common=1)
+    assert lanes_agree(None, None)
+    assert not lanes_agree((left, right), None)

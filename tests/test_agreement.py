@@ -1,0 +1,107 @@
+"""RLD and CLC agree on clean tracks (issue 5, item 2): regression tests.
+
+On generated tracks without false positives and on the shared dataset tracks with none added,
+at every k-th pose of the protocol (R = 50 m), ``solve_lane(..., method="rld")`` and
+``solve_lane(..., method="clc")`` are compared over their common horizon
+(``rld.metrics.lanes_agree``: from the later of the two starts to the end of the shorter lane,
+which is RLD's cone window).
+
+What holds today, and what these tests assert:
+- Wherever both lanes follow the ground truth (strict categories ``gt``, ``near_gt`` or
+  ``too_short``), they are the same lane over the common horizon: the two methods share the
+  side convention, the order from the car forward and the boundary cones.
+- The two methods do not yet agree at every pose: where they differ, one of them (or both)
+  diverges from the ground truth (each method's own failures, docs/results.md). The agreement
+  rate is held to a floor a little under what was measured (generated tracks 104 of 116 poses,
+  dataset tracks 63 of 72, 2026-11-24), so that a regression in either method, or in the
+  conventions they share, fails here with the poses and a picture of each disagreement.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from rld.api import solve_lane
+from rld.generator import generate_track
+from rld.metrics import lanes_agree, score_lane
+from rld.simulation import simulate_lap
+from rld.tracks import load_dataset_track
+
+# A time budget far above what these windows need, so that the result does not depend on
+# the machine's load (a solve cut short by the default 0.4 s could return another lane).
+TIME_LIMIT_S = 3.0
+FOLLOWS_TRUTH = ("gt", "near_gt", "too_short")
+
+
+def _compare(tracks, every: int, folder: Path) -> tuple[int, list[str], list[str]]:
+    """Solve every ``every``-th pose with both methods; returns (poses, disagreements,
+    contradictions), each a line naming the pose, with a plot path for disagreements.
+    A contradiction: both lanes follow the truth, yet they differ."""
+    from rld.plotting import plot_scene
+
+    n, disagree, contradict = 0, [], []
+    for track in tracks:
+        lap = simulate_lap(track, range_m=50.0, fp_rate=0.0, seed=0)
+        for k in range(0, len(lap), every):
+            f = lap.frame(k)
+            lanes = {m: solve_lane(f.cones, f.pose, method=m, time_limit_s=TIME_LIMIT_S)
+                     for m in ("rld", "clc")}
+            n += 1
+            if lanes_agree(lanes["rld"], lanes["clc"]):
+                continue
+            cats = {m: score_lane(f, lane.left, lane.right, lane.ok, lane.closed).category
+                    for m, lane in lanes.items()}
+            path = folder / f"{track.name.replace(' ', '_')}_pose{k}.png"
+            import matplotlib.pyplot as plt
+
+            fig, axes = plt.subplots(1, 2, figsize=(14, 7))
+            for ax, (m, lane) in zip(axes, lanes.items(), strict=True):
+                plot_scene(f.cones, lane=lane, pose=f.pose, gt_left=f.gt_left,
+                           gt_right=f.gt_right, title=f"{m}: {cats[m]}", ax=ax)
+            fig.savefig(path, dpi=80)
+            plt.close(fig)
+            line = (f"{track.name} pose {k}: rld {cats['rld']}, clc {cats['clc']} "
+                    f"(plot: {path})")
+            disagree.append(line)
+            if all(lanes[m].ok and cats[m] in FOLLOWS_TRUTH for m in lanes):
+                contradict.append(line)
+    return n, disagree, contradict
+
+
+def _check(n: int, disagree: list[str], contradict: list[str], floor: float) -> None:
+    assert not contradict, (
+        "rld and clc both follow the ground truth but differ over their common horizon:\n"
+        + "\n".join(contradict))
+    rate = 1.0 - len(disagree) / n
+    assert rate >= floor, (
+        f"rld and clc agree on {rate:.1%} of {n} poses (floor {floor:.0%}); disagreements:\n"
+        + "\n".join(disagree))
+
+
+def test_rld_and_clc_agree_on_clean_generated_tracks(tmp_path):
+    tracks = [generate_track(100 + s) for s in range(4)]
+    n, disagree, contradict = _compare(tracks, every=10, folder=tmp_path)
+    assert n == 116
+    _check(n, disagree, contradict, floor=0.85)
+
+
+def test_rld_and_clc_agree_on_the_dataset_tracks(dataset_dir, tmp_path):
+    tracks = [load_dataset_track(dataset_dir, k) for k in (1, 2, 3, 4, 6, 7)]
+    n, disagree, contradict = _compare(tracks, every=20, folder=tmp_path)
+    assert n == 72
+    _check(n, disagree, contradict, floor=0.83)
+
+
+@pytest.mark.parametrize("swap", ["sides", "order"])
+def test_the_comparison_sees_a_swapped_lane(swap):
+    # The comparison is not blind to the conventions it is meant to guard.
+    lap = simulate_lap(generate_track(100), range_m=50.0, fp_rate=0.0, seed=0)
+    f = lap.frame(40)
+    lane = solve_lane(f.cones, f.pose, method="clc")
+    assert lane.ok
+    other = ((lane.right, lane.left) if swap == "sides"
+             else (lane.left[::-1].copy(), lane.right[::-1].copy()))
+    assert lanes_agree(lane, (lane.left, lane.right))
+    assert not lanes_agree(lane, other)
