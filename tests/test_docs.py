@@ -1,0 +1,41 @@
+"""The docs stay true to the code: every ``LaneParams`` field with its default and every
+registered method appear in docs/api.md; the README opens with the two commands of a fresh
+machine."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from pathlib import Path
+
+from rld.api import METHODS
+from rld.types import LaneParams
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _default_text(value) -> str:
+    return f"{value:.6g}" if isinstance(value, float) else str(value)
+
+
+def test_api_reference_lists_every_param_with_its_default():
+    text = (ROOT / "docs" / "api.md").read_text()
+    rows = dict(re.findall(r"^\| `(\w+)` \| ([^|]+) \|", text, flags=re.M))
+    for f in dataclasses.fields(LaneParams):
+        assert f.name in rows, f"docs/api.md does not list LaneParams.{f.name}"
+        assert rows[f.name].strip() == _default_text(f.default), (
+            f"docs/api.md gives LaneParams.{f.name} = {rows[f.name].strip()}, "
+            f"the code {_default_text(f.default)}")
+
+
+def test_api_reference_names_every_method():
+    text = (ROOT / "docs" / "api.md").read_text()
+    for name in METHODS:
+        assert f"`{name}`" in text, f"docs/api.md does not name method {name!r}"
+
+
+def test_readme_opens_with_the_two_commands():
+    lines = (ROOT / "README.md").read_text().splitlines()
+    block = lines[lines.index("```bash") + 1: lines.index("```bash") + 3]
+    assert block[0].startswith("pip install . && rld demo")
+    assert block[1].startswith("pip install -e '.[dev]' && pytest")
