@@ -51,7 +51,8 @@ def test_lane_params_validation():
     p = LaneParams()
     assert p.max_cone_spacing_m == 5.5 and p.min_width_m == 2.5 and p.max_width_m == 6.5
     assert p.max_iterations == 250  # measured better than the paper's 2500 (see LaneParams)
-    assert p.max_angle_cost == pytest.approx((math.pi / 2) ** 4)
+    assert p.angle_tolerance_rad == 0.7  # tuned (see LaneParams)
+    assert p.max_angle_cost == pytest.approx((math.pi / 2 / 0.7) ** 4)
     with pytest.raises(ValueError, match="min_width_m"):
         LaneParams(min_width_m=7.0)
     with pytest.raises(ValueError, match="positive"):
