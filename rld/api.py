@@ -134,6 +134,9 @@ class LaneSolver:
     ``rld_cost``, ``longest`` or an object with ``score``); a method without backends or
     rankers rejects them. ``options``: further keyword arguments of the method's model, e.g.
     ``{"warm_start": True, "graph": "delaunay"}`` for CLC (``clc.solver.ClcModel``).
+    ``track=True`` runs the lane tracker of Huang et al. (``rld.tracker``) over the lanes:
+    each returned lane then carries ``lane.stats["tracked"]``, a ``TrackedLane`` (the tracked
+    centreline and its confidences) beside the raw lane.
     """
 
     def __init__(
@@ -143,6 +146,7 @@ class LaneSolver:
         backend: str | None = None,
         ranker: Any = None,
         options: dict | None = None,
+        track: bool = False,
     ) -> None:
         self.method = _check_method(method)
         self.params = params if params is not None else LaneParams()
@@ -161,6 +165,11 @@ class LaneSolver:
             raise ValueError(f"method {method!r} does not take options {options!r}: {exc}") \
                 from exc
         self.previous: Lane | None = None
+        self.tracker = None
+        if track:
+            from rld.tracker import LaneTracker
+
+            self.tracker = LaneTracker()
 
     def solve(
         self,
@@ -186,6 +195,9 @@ class LaneSolver:
         lane.stats.setdefault("backend", self.backend)
         lane.stats.update(method=self.method, solve_time_s=elapsed, n_cones=int(points.shape[0]))
         lane.stats.setdefault("n_cones_used", int(points.shape[0]))
+        if self.tracker is not None:
+            lane.stats["tracked"] = self.tracker.update(
+                lane.centerline if lane.ok else None, car.xy, car.heading)
         self.previous = lane
         return lane
 
