@@ -16,12 +16,15 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from rld.api import LaneSolver
-from rld.metrics import CATEGORIES, score_lane
+from rld.metrics import CATEGORIES, score_lane, stability_ratio
 from rld.simulation import simulate_lap
 from rld.tracks import Track
 from rld.types import LaneParams
 
-__all__ = ["PoseRecord", "run_protocol", "summarize"]
+__all__ = ["PoseRecord", "run_protocol", "summarize", "STABILITY_RADII_M"]
+
+#: The radii (m) at which the stability ratio of Huang et al. (eq. 5) is recorded.
+STABILITY_RADII_M = (5.0, 10.0, 20.0)
 
 
 @dataclass(frozen=True)
@@ -47,6 +50,15 @@ class PoseRecord:
     """Search iterations (CLC), -1 where the method has none."""
     complete: bool | None = None
     """The search was complete (CLC: every feasible pair enumerated); None where not a search."""
+    stability_5: float = math.nan
+    """Huang et al. eq. 5 between this lane's centreline and the previous pose's, radius 5 m;
+    NaN when either has no lane or does not reach the circle. Likewise 10 and 20 m."""
+    stability_10: float = math.nan
+    stability_20: float = math.nan
+    tracked_stability_5: float = math.nan
+    """The same ratios for the tracked lane (``rld.tracker``, its confident control points)."""
+    tracked_stability_10: float = math.nan
+    tracked_stability_20: float = math.nan
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -88,9 +100,13 @@ def run_protocol(
         return LaneSolver(method=method, params=params, backend=backend, ranker=ranker,
                           options=options)
 
+    from rld.tracker import LaneTracker
+
     for track in tracks:
         lap = simulate_lap(track, range_m=range_m, fp_rate=fp_rate, seed=seed)
         solver = make() if stateful else None
+        tracker = LaneTracker()  # for the stability of the tracked lane, whatever the method
+        prev = None  # (pose, raw centreline, tracked centreline) of the previous pose
         for k in range(0, len(lap), every):
             frame = lap.frame(k)
             s = solver or make()
@@ -98,6 +114,10 @@ def run_protocol(
             lane = s.solve(frame.cones, frame.pose, time_limit_s=time_limit_s)
             latency = time.perf_counter() - t0
             sc = score_lane(frame, lane.left, lane.right, lane.ok, lane.closed)
+            raw = lane.centerline if lane.ok else None
+            tracked = tracker.update(raw, frame.pose.xy, frame.pose.heading).confident(0.5)
+            stab = _stability(prev, frame.pose, raw, tracked)
+            prev = (frame.pose, raw, tracked)
             records.append(PoseRecord(
                 track=track.name, pose=k, range_m=range_m, fp_rate=fp_rate,
                 method=label or method,
@@ -108,6 +128,7 @@ def run_protocol(
                 n_cones=int(frame.cones.shape[0]),
                 iterations=int(lane.stats.get("iterations", -1)),
                 complete=lane.stats.get("complete"),
+                **stab,
             ))
             if plot_failures and sc.critical:
                 _plot_failure(plot_failures, label or method, track.name, frame, lane, sc,
@@ -117,6 +138,21 @@ def run_protocol(
     if bar is not None:
         bar.close()
     return records
+
+
+def _stability(prev, pose, raw, tracked) -> dict:
+    """The stability ratios (eq. 5) of the raw and the tracked lane against the previous pose:
+    the circle is centred at the previous position, d_v is the distance driven since."""
+    out = {}
+    for r in STABILITY_RADII_M:
+        for name, line, k in (("stability", raw, 1), ("tracked_stability", tracked, 2)):
+            v = math.nan
+            if prev is not None and line is not None and prev[k] is not None \
+                    and len(line) >= 2 and len(prev[k]) >= 2:
+                moved = float(np.hypot(*(pose.xy - prev[0].xy)))
+                v = stability_ratio(prev[k], line, prev[0].xy, r, moved)
+            out[f"{name}_{r:g}"] = v
+    return out
 
 
 def _plot_failure(folder, method, track, frame, lane, sc, range_m, fp_rate) -> None:
@@ -156,6 +192,11 @@ def summarize(records: list[PoseRecord]) -> dict:
     out["latency_p95_ms"] = float(np.percentile(lat, 95))
     out["latency_max_ms"] = float(lat.max())
     out["latency_p99_ms"] = float(np.percentile(lat, 99))
+    for r_m in STABILITY_RADII_M:
+        for name in ("stability", "tracked_stability"):
+            v = [getattr(r, f"{name}_{r_m:g}") for r in records]
+            v = [x for x in v if not math.isnan(x)]
+            out[f"{name}_{r_m:g}"] = float(np.mean(v)) if v else math.nan
     done = [r.complete for r in records if r.complete is not None]
     if done:
         out["complete"] = 100.0 * float(np.mean(done))

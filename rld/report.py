@@ -30,6 +30,7 @@ from rld.metrics import CATEGORIES
 from rld.tracks import Track
 
 __all__ = ["MethodSpec", "parse_method", "evaluate", "summaries", "table_markdown",
+           "stability_markdown",
            "write_outputs", "plot_summaries"]
 
 
@@ -147,6 +148,25 @@ def table_markdown(rows: list[dict]) -> str:
     return "\n".join(parts)
 
 
+def stability_markdown(rows: list[dict]) -> str:
+    """The average stability ratio of Huang et al. (eq. 5) per method, range and false-positive
+    rate at the radii of ``STABILITY_RADII_M``, of the raw lanes and of the tracked lanes
+    (``rld.tracker``): the sideways movement of the lane where it crosses the circle, per metre
+    driven (0 is perfectly stable)."""
+    from rld.evaluation import STABILITY_RADII_M
+
+    radii = [f"{r:g}" for r in STABILITY_RADII_M]
+    head = " | ".join(f"raw {r} m" for r in radii) + " | " + " | ".join(
+        f"tracked {r} m" for r in radii)
+    parts = [f"| method | R (m) | FP | {head} |", "|" + "---|" * (3 + 2 * len(radii))]
+    for r in rows:
+        vals = [r.get(f"stability_{x}", math.nan) for x in radii] + [
+            r.get(f"tracked_stability_{x}", math.nan) for x in radii]
+        cells = " | ".join("-" if v is None or math.isnan(v) else f"{v:.3f}" for v in vals)
+        parts.append(f"| {r['method']} | {r['range_m']:g} | {r['fp_rate']:.0%} | {cells} |")
+    return "\n".join(parts) + "\n"
+
+
 def plot_summaries(rows: list[dict], records: list[PoseRecord], folder: Path) -> list[Path]:
     """Categories per false-positive rate (stacked bars), IoU against the rate, latency CDF."""
     import matplotlib
@@ -209,6 +229,31 @@ def plot_summaries(rows: list[dict], records: list[PoseRecord], folder: Path) ->
     paths.append(folder / "latency_cdf.png")
     fig.savefig(paths[-1], dpi=110)
     plt.close(fig)
+
+    # Stability against the radius (Huang et al. fig. 19), at the lowest false-positive rate.
+    from rld.evaluation import STABILITY_RADII_M
+
+    fig, ax = plt.subplots(figsize=(5, 4))
+    for m, rng in keys:
+        sub = sorted((r for r in rows if (r["method"], r["range_m"]) == (m, rng)),
+                     key=lambda r: r["fp_rate"])
+        if not sub or f"stability_{STABILITY_RADII_M[0]:g}" not in sub[0]:
+            continue
+        r0 = sub[0]
+        raw = [r0[f"stability_{x:g}"] for x in STABILITY_RADII_M]
+        trk = [r0[f"tracked_stability_{x:g}"] for x in STABILITY_RADII_M]
+        line, = ax.plot(STABILITY_RADII_M, raw, "o-", label=f"{m}, {rng:g} m")
+        ax.plot(STABILITY_RADII_M, trk, "o--", color=line.get_color(),
+                label=f"{m}, {rng:g} m, tracked")
+    ax.set_xlabel("radius r (m)")
+    ax.set_ylabel("average stability ratio")
+    ax.set_title("stability (Huang et al. eq. 5), lowest FP rate", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    paths.append(folder / "stability.png")
+    fig.savefig(paths[-1], dpi=110)
+    plt.close(fig)
     return paths
 
 
@@ -228,7 +273,8 @@ def write_outputs(records: list[PoseRecord], folder: str | Path, header: str = "
     rows = summaries(records)
     (folder / "summary.json").write_text(
         json.dumps([{k: _clean(v) for k, v in r.items()} for r in rows], indent=1) + "\n")
-    md = (header + "\n\n" if header else "") + table_markdown(rows)
+    md = ((header + "\n\n" if header else "") + table_markdown(rows)
+          + "\n**Stability** (Huang et al. eq. 5)\n\n" + stability_markdown(rows))
     (folder / "results.md").write_text(md)
     plots = plot_summaries(rows, records, folder)
     return {"poses": folder / "poses.jsonl", "summary": folder / "summary.json",
@@ -283,6 +329,13 @@ def results_page(rows: list[dict], header: str, images: Sequence[str] = ()) -> s
         *[f"![{Path(i).stem}]({i})" for i in images],
         "",
         table_markdown(rows),
+        "## Stability",
+        "",
+        "The average stability ratio of Huang et al. (2009, section 3.5, eq. 5) between",
+        "consecutive poses (1 m apart), of each method's lanes and of the same lanes after the",
+        "lane tracker of their section 2.3 (`rld.tracker`, confident control points only):",
+        "",
+        stability_markdown(rows),
         "## The papers' figures",
         "",
         PAPER_FIGURES,

@@ -46,8 +46,8 @@ TIE = 1e-6  # objective tolerance (CP-SAT and HiGHS agree with numpy to about 1e
 
 def track_instance(seed: int, n: int) -> tuple[np.ndarray, Pose]:
     """Two noisy boundary rows (3.5-4.5 m apart, 2.5-4.5 m spacing, a random constant bend)
-    with 1-5 false positives (at most n - 4), ``n`` cones in all, rotated and shifted at random; the car
-    between the first cones, heading along the lane."""
+    with 1-5 false positives (at most n - 4), ``n`` cones in all, rotated and shifted at
+    random; the car between the first cones, heading along the lane."""
     rng = np.random.default_rng(seed)
     fp = int(rng.integers(1, min(5, n - 4) + 1))  # at least two cones per boundary
     k_left = (n - fp) // 2

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+import math
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -64,3 +66,36 @@ def test_eval_command_on_a_generated_track(tmp_path):
 def test_eval_command_refuses_unknown_methods(tmp_path):
     res = CliRunner().invoke(main, ["eval", "--methods", "rld,foo", "--generated", "1"])
     assert res.exit_code != 0 and "unknown method" in res.output
+
+
+def test_stability_is_recorded_and_tabulated(tmp_path):
+    from rld.evaluation import _stability
+    from rld.metrics import stability_ratio
+    from rld.types import Pose
+
+    # Hand-worked: the car drives 1 m along x; the previous lane runs along y = 0, the new one
+    # along y = 0.5: at every radius the crossing moved 0.5 m sideways per metre driven.
+    prev_line = np.column_stack([np.linspace(0, 40, 41), np.zeros(41)])
+    new_line = prev_line + [0.0, 0.5]
+    prev = (Pose(0.0, 0.0, 0.0), prev_line, prev_line)
+    got = _stability(prev, Pose(1.0, 0.0, 0.0), new_line, prev_line)
+    for r in (5, 10, 20):
+        # The crossings of y = 0 and y = 0.5 with the circle of radius r about the origin.
+        expect = math.hypot(r - math.sqrt(r * r - 0.25), 0.5)
+        assert got[f"stability_{r}"] == pytest.approx(expect)
+        assert got[f"stability_{r}"] == stability_ratio(prev_line, new_line, (0, 0), r, 1.0)
+        assert got[f"tracked_stability_{r}"] == 0.0  # the tracked lane did not move
+    assert all(math.isnan(v) for v in _stability(None, Pose(0, 0, 0), new_line, None).values())
+
+    # Driven along a lap, a method's records carry the ratios and the summary their means.
+    recs = run_protocol([generate_track(3)], method="clc", range_m=30.0, every=1,
+                        stateful=True)[:40]
+    vals = [r.stability_10 for r in recs if not math.isnan(r.stability_10)]
+    assert len(vals) >= 30 and all(v >= 0 for v in vals)
+    rows = summaries(recs)
+    assert rows[0]["stability_10"] == pytest.approx(np.mean(vals))
+    assert not math.isnan(rows[0]["tracked_stability_10"])
+    paths = write_outputs(recs, tmp_path / "out")
+    md = paths["results"].read_text()
+    assert "**Stability**" in md and "tracked 20 m" in md
+    assert (tmp_path / "out" / "stability.png").stat().st_size > 0
