@@ -35,6 +35,24 @@ class _NearestMethod:
         return lane
 
 
+class _HuangMethod:
+    """The fitted-centreline baseline after Huang et al. 2009 (``rld.huang``), stateless."""
+
+    backends: tuple[str, ...] = ()
+    rankers = False
+
+    def __init__(self, params: LaneParams, backend: str | None = None, ranker=None) -> None:
+        self.params = params
+
+    def solve(self, points, pose, colors=None, time_limit_s=None, confidence=None) -> Lane:
+        from rld.huang import huang_lane
+
+        lane = huang_lane(points, pose, self.params)
+        if colors is not None or confidence is not None:
+            lane.stats["note"] = "the fitted baseline ignores colors and confidence"
+        return lane
+
+
 class _RldMethod:
     """RLD (Brandes et al. 2020) with a reusable model and warm starts."""
 
@@ -81,6 +99,7 @@ METHODS: dict[str, Callable[..., Any]] = {
     "rld-sided": _RldSidedMethod,
     "clc": _ClcMethod,
     "nearest": _NearestMethod,
+    "huang": _HuangMethod,
 }
 #: The method ``solve_lane`` uses when none is named.
 DEFAULT_METHOD = "rld"
