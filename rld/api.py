@@ -76,6 +76,23 @@ class _RldSidedMethod(_RldMethod):
     sided = True
 
 
+class _RldIncrementalMethod:
+    """RLD on a growing map: keeps its lane and re-optimises the frontier (``rld.incremental``)."""
+
+    backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy")
+    rankers = False
+
+    def __init__(self, params: LaneParams, backend: str | None = None, ranker=None,
+                 **options) -> None:
+        from rld.incremental import IncrementalRld
+
+        self.model = IncrementalRld(params, backend=backend, **options)
+
+    def solve(self, points, pose, colors=None, time_limit_s=None, confidence=None) -> Lane:
+        return self.model.solve(points, pose, time_limit_s=time_limit_s, colors=colors,
+                                confidence=confidence)
+
+
 class _ClcMethod:
     """CLC (Ivanov & Markgraf 2024): path-pair enumeration and a ranker, warm-started."""
 
@@ -97,6 +114,7 @@ class _ClcMethod:
 METHODS: dict[str, Callable[..., Any]] = {
     "rld": _RldMethod,
     "rld-sided": _RldSidedMethod,
+    "rld-incremental": _RldIncrementalMethod,
     "clc": _ClcMethod,
     "nearest": _NearestMethod,
     "huang": _HuangMethod,

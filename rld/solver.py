@@ -110,10 +110,13 @@ class RldModel:
         start: tuple[int, int] | None = None,
         colors: np.ndarray | None = None,
         confidence: np.ndarray | None = None,
+        fixed_edges: list[tuple[int, int]] | None = None,
     ) -> Lane:
         """Solve on validated ``points``. ``start`` (indices into ``points``) fixes the two near
-        endpoints, for the cross-check with CLC's starting vertices. ``colors`` and
-        ``confidence`` (validated, one per cone) add their costs."""
+        endpoints, for the cross-check with CLC's starting vertices and the incremental solver.
+        ``colors`` and ``confidence`` (validated, one per cone) add their costs.
+        ``fixed_edges`` (pairs of indices into ``points``) must be in the lane (their columns'
+        lower bound is 1; ``rld.incremental`` ties its frontier to the confirmed lane so)."""
         budget = DEFAULT_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
         t0 = time.perf_counter()
         if start is None and near_car_mask(points, pose, self.params.near_radius_m).sum() < 2:
@@ -126,6 +129,8 @@ class RldModel:
         window, horizon = cone_window(points, pose, self.params)
         if start is not None:
             window = np.union1d(window, np.asarray(start))
+        if fixed_edges:
+            window = np.union1d(window, np.asarray(fixed_edges, dtype=np.int64).ravel())
         local_start = None
         if start is not None:
             local_start = (int(np.searchsorted(window, start[0])),
@@ -141,6 +146,17 @@ class RldModel:
                                 colors=None if colors is None else colors[window],
                                 confidence=None if confidence is None else confidence[window])
         stats.update(program.stats)
+        if fixed_edges:
+            eid = {(int(i), int(j)): k for k, (i, j) in enumerate(program.edges)}
+            cols = program.block("a")
+            for a, b in fixed_edges:
+                la, lb = int(np.searchsorted(window, a)), int(np.searchsorted(window, b))
+                k = eid.get((min(la, lb), max(la, lb)))
+                if k is None:
+                    return Lane.not_found(points, f"fixed edge ({a}, {b}) is not a candidate "
+                                          "edge of the program", status=LaneStatus.INFEASIBLE,
+                                          stats=stats)
+                program.col_lo[cols.start + k] = 1.0
         stats["build_time_s"] = time.perf_counter() - t0
         if program.near.sum() < 2:
             return Lane.not_found(

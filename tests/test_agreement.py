@@ -13,8 +13,9 @@ What holds today, and what these tests assert:
 - The two methods do not yet agree at every pose: where they differ, one of them (or both)
   diverges from the ground truth (each method's own failures, docs/results.md). The agreement
   rate is held to a floor a little under what was measured (generated tracks 102 of 116 poses,
-  dataset tracks 67 of 72, 2026-11-25, RLD with theta_t = 0.7 rad), so that a regression in either method, or in the
-  conventions they share, fails here with the poses and a picture of each disagreement.
+  dataset tracks 67 of 72, 2026-11-25, RLD with theta_t = 0.7 rad), so that a regression in
+  either method, or in the conventions they share, fails here with the poses and a picture of
+  each disagreement.
 """
 
 from __future__ import annotations
