@@ -84,14 +84,18 @@ def edge_objective(
     pose: Pose,
     params: LaneParams,
     colors: np.ndarray | None = None,
+    heading: bool = True,
 ) -> np.ndarray:
     """Coefficient of every edge variable in RLD's objective (eq. 29):
     ``w_s s_ij + w_p p_ij - w_b``, plus ``w_color`` times the colour cost when ``colors`` are
-    given."""
+    given. ``heading=False`` leaves out the heading cost ``w_p p_ij`` (the incremental
+    solver's frontier, whose direction is fixed by its junction edges instead)."""
     lengths = np.hypot(*(points[edges[:, 1]] - points[edges[:, 0]]).T)
     s = spacing_cost(lengths, params.expected_spacing_m, params.spacing_tolerance_m)
-    p = heading_cost(points, edges, pose, params.heading_min_distance_m)
-    out = params.w_spacing * s + params.w_heading * p - params.w_benefit
+    out = params.w_spacing * s - params.w_benefit
+    if heading:
+        out = out + params.w_heading * heading_cost(points, edges, pose,
+                                                    params.heading_min_distance_m)
     if colors is not None:
         out = out + params.w_color * color_cost(colors, edges)
     return out

@@ -10,10 +10,13 @@ re-optimises only its frontier:
 2. Frontier. The last ``frontier_cones`` cones of each boundary are released; the cone before
    them (the anchor) and the one before that (its predecessor) stay. The frontier program is
    the ordinary RLD program (``rld.program`` through ``rld.solver.RldModel``, the shared
-   constraints and costs) over the map cones not in the kept lane, seen from a virtual pose
-   between the two anchors heading along the lane: its cone window (the ``max_cones`` nearest
-   ahead of that pose), its near endpoints fixed to the two predecessors and the edges
-   predecessor-anchor fixed to 1, so the turn limit and the angle cost hold at the junction.
+   constraints and costs) over the map cones not in the kept lane. Its window: the
+   ``frontier_max_cones`` (default ``max_cones``) free cones nearest to the anchors by path
+   length over the candidate edges, none far behind them. Its near endpoints are fixed to the
+   two predecessors and the edges predecessor-anchor to 1, so the turn limit and the angle
+   cost hold at the junction. The heading row and cost (RLD eqs 9, 25) are left out: the
+   junction edges fix the direction they stand in for. The program's pose (it names the
+   sides) lies between the anchors, heading along the lane.
 3. Rollback. When the frontier program has no lane, the kept part is cut back two more cones
    per side and the frontier solved again, up to ``max_rollbacks`` times; then the solver
    restarts from scratch (the windowed RLD from the car). It restarts too when the car has
@@ -23,8 +26,8 @@ re-optimises only its frontier:
    own first cone and the closed lane meets the CLC lane predicates, the lane is closed and
    frozen.
 
-The returned ``Lane`` starts at the boundary cone nearest the car on each side (the one before
-it when that one is ahead of the car) and runs forward to the end of the lane (around the loop
+The returned ``Lane`` starts at the boundary cone nearest the car on each side (the next one
+when that one is behind the car) and runs forward to the end of the lane (around the loop
 when closed). ``lane.stats`` counts ``restarts`` and ``rollbacks`` (over the solver's life),
 says ``mode`` (``start``, ``extend``, ``closed``) and reports the frontier program's cones.
 
@@ -41,9 +44,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
-from rld.constraints import lane_is_feasible
+from rld.constraints import crossing_edge_pairs, lane_is_feasible, width_conflicts
 from rld.solver import MATCH_TOLERANCE_M, RldModel
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
@@ -55,6 +60,10 @@ POSE_JUMP_RAD = math.radians(45.0)
 MIN_AHEAD = 3
 
 
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / max(float(np.hypot(v[0], v[1])), 1e-9)
+
+
 class IncrementalRld:
     """RLD that keeps its lane between calls and re-optimises only the frontier (module
     docstring). ``backend``: as ``RldModel``; ``frontier_cones``: cones per side released and
@@ -62,11 +71,15 @@ class IncrementalRld:
     two more cones before a restart."""
 
     def __init__(self, params: LaneParams, backend: str | None = None, frontier_cones: int = 3,
-                 max_rollbacks: int = 3) -> None:
+                 max_rollbacks: int = 3, frontier_max_cones: int | None = None) -> None:
         if frontier_cones < 1 or max_rollbacks < 0:
             raise ValueError("frontier_cones must be >= 1 and max_rollbacks >= 0")
         self.params = params
         self.frontier_cones = int(frontier_cones)
+        self.frontier_max_cones = int(params.max_cones if frontier_max_cones is None
+                                      else frontier_max_cones)
+        if self.frontier_max_cones < 6:
+            raise ValueError("frontier_max_cones must be at least 6")
         self.max_rollbacks = int(max_rollbacks)
         self.window = RldModel(params, backend=backend)  # from the car: starts
         self.frontier = RldModel(params, backend=backend)  # from the virtual pose
@@ -104,48 +117,129 @@ class IncrementalRld:
             return None
         return out[0], out[1]
 
-    def _closable(self, points, L, R) -> bool:
-        p = self.params
-        if L.size < 4 or R.size < 4:
-            return False
-        for side in (L, R):
-            if np.hypot(*(points[side[-1]] - points[side[0]])) > p.max_cone_spacing_m:
-                return False
-        return lane_is_feasible(points[L], points[R], p, closed=True)
-
     def _extend(self, points, L, R, time_limit_s):
-        """One frontier solve with ``back`` cones released per side; the new (L, R) or None."""
+        """One frontier solve with ``back`` cones released per side, rolled back as the module
+        docstring says. Returns ((L, R) or None, rollbacks, closes): ``closes`` when both
+        frontier paths ended on their own boundary's first cone (the loop closes there)."""
         for attempt in range(self.max_rollbacks + 1):
             back = self.frontier_cones + 2 * attempt
             kl, kr = L[: max(L.size - back, 0)], R[: max(R.size - back, 0)]
             if kl.size < 2 or kr.size < 2:
-                return None, attempt
+                return None, attempt, False
             ql, al, qr, ar = int(kl[-2]), int(kl[-1]), int(kr[-2]), int(kr[-1])
-            # Cones the frontier may use: the map minus the kept lane, plus the junction cones.
+            # Cones the frontier may use: the map minus the kept lane, plus the junction cones
+            # and, for closing the loop (CLC IV-E), each boundary's first cone.
             kept = np.union1d(kl[:-2], kr[:-2])
+            firsts = (int(L[0]), int(R[0])) if kl.size >= 4 and kr.size >= 4 else None
+            if firsts is not None:
+                kept = np.setdiff1d(kept, firsts)
             free = np.setdiff1d(np.arange(points.shape[0]), kept)
             mid = 0.5 * (points[al] + points[ar])
-            d = (points[al] - points[ql]) / max(np.hypot(*(points[al] - points[ql])), 1e-9) + \
-                (points[ar] - points[qr]) / max(np.hypot(*(points[ar] - points[qr])), 1e-9)
+            dl, dr = _unit(points[al] - points[ql]), _unit(points[ar] - points[qr])
+            d = dl + dr
             vpose = Pose(float(mid[0]), float(mid[1]), float(math.atan2(d[1], d[0])))
+            window = self._frontier_window(points, free, (ql, al, dl), (qr, ar, dr))
             loc = {int(v): k for k, v in enumerate(free)}
             lane = self.frontier.solve(
                 points[free], vpose, time_limit_s=time_limit_s, start=(loc[ql], loc[qr]),
-                fixed_edges=[(loc[ql], loc[al]), (loc[qr], loc[ar])])
-            if lane.ok:
-                fl, fr = free[lane.left], free[lane.right]
-                if fl[0] == ql and fr[0] == qr and fl.size >= 2 and fr.size >= 2 \
-                        and fl[1] == al and fr[1] == ar:
-                    self._last_frontier = lane.stats
-                    return (np.concatenate([kl[:-2], fl]), np.concatenate([kr[:-2], fr])), \
-                        attempt
-        return None, self.max_rollbacks + 1
+                fixed_edges=[(loc[ql], loc[al]), (loc[qr], loc[ar])],
+                window=np.searchsorted(free, window), heading=False)
+            if not lane.ok:
+                continue
+            fl, fr = free[lane.left], free[lane.right]
+            if fl[0] == qr and fr[0] == ql:  # named by the program's pose: ours by the start
+                fl, fr = fr, fl
+            if not (fl[0] == ql and fr[0] == qr and fl.size >= 2 and fr.size >= 2
+                    and fl[1] == al and fr[1] == ar):
+                continue
+            ends = [False, False]
+            if firsts is not None:
+                paths = [fl, fr]
+                for side in (0, 1):
+                    if firsts[1 - side] in paths[side]:  # ran into the other side's start
+                        paths = None
+                        break
+                    hit = np.flatnonzero(paths[side] == firsts[side])
+                    if hit.size:  # reached its own start: the boundary ends before it
+                        paths[side] = paths[side][: hit[0]]
+                        ends[side] = True
+                if paths is None:
+                    continue
+                fl, fr = paths
+            newL, newR = np.concatenate([kl[:-2], fl]), np.concatenate([kr[:-2], fr])
+            if not self._consistent(points, newL, newR, kl.size - 1, kr.size - 1, ends):
+                continue
+            self._last_frontier = lane.stats
+            closes = all(ends) and lane_is_feasible(points[newL], points[newR], self.params,
+                                                    closed=True)
+            return (newL, newR), attempt, closes
+        return None, self.max_rollbacks + 1, False
+
+    def _consistent(self, points, L, R, fl0, fr0, ends) -> bool:
+        """The frontier against the whole lane: no frontier edge (from index ``fl0`` / ``fr0``
+        of each side on, with the closing edge of a side that reached its start) crosses or
+        comes closer than ``min_width_m`` to any other lane edge, by the shared constraint
+        families of RLD (eqs 6-8 and the no-crossing rows of section V, ``rld.constraints``),
+        which the frontier program itself applies only among its own cones."""
+        edges, new = [], []
+        for side, f0, closes in ((L, fl0, ends[0]), (R, fr0, ends[1])):
+            seq = np.r_[side, side[:1]] if closes else side
+            e = np.column_stack([seq[:-1], seq[1:]])
+            edges.append(e)
+            new.append(np.arange(e.shape[0]) >= f0)
+        edges, new = np.vstack(edges), np.concatenate(new)
+        bad = np.vstack([crossing_edge_pairs(points, edges),
+                         width_conflicts(points, edges, self.params.min_width_m)])
+        return not np.any(new[bad[:, 0]] | new[bad[:, 1]])
+
+    def _frontier_window(self, points, free, left, right) -> np.ndarray:
+        """The frontier program's cones (indices into ``points``): the two junctions
+        (predecessor and anchor per side) and the free cones nearest to the anchors along the
+        map, ``frontier_max_cones`` in all. Nearest by path length over the candidate edges
+        (cone pairs within ``max_cone_spacing_m``, Dijkstra from both anchors), so a window
+        follows the lane on from its end instead of filling with another part of the track
+        that lies close as the crow flies; a cone more than ``window_behind_m`` behind both
+        anchors, along their own sides' last edges, is left out."""
+        p = self.params
+        junction = np.array([left[0], left[1], right[0], right[1]], dtype=np.int64)
+        anchors = np.array([left[1], right[1]], dtype=np.int64)
+        # Only cones that a few edges could reach matter: a disc around the anchors.
+        reach = p.max_cone_spacing_m * self.frontier_max_cones / 2.0
+        near = np.hypot(*(points[free][:, None, :] - points[anchors][None, :, :]).transpose(
+            2, 0, 1)).min(axis=1) <= reach
+        cand = free[near]
+        ahead = np.zeros(cand.size, dtype=bool)
+        for _, anchor, direction in (left, right):
+            ahead |= (points[cand] - points[anchor]) @ direction >= -p.window_behind_m
+        cand = np.union1d(cand[ahead], junction)
+        xy = points[cand]
+        pairs = cKDTree(xy).query_pairs(p.max_cone_spacing_m, output_type="ndarray")
+        if pairs.size == 0:
+            return junction
+        w = np.hypot(*(xy[pairs[:, 0]] - xy[pairs[:, 1]]).T)
+        graph = coo_matrix((w, (pairs[:, 0], pairs[:, 1])), shape=(cand.size, cand.size))
+        src = np.searchsorted(cand, anchors)
+        dist = dijkstra(graph, directed=False, indices=src, min_only=True)
+        others = np.flatnonzero(np.isfinite(dist) & ~np.isin(cand, junction))
+        order = others[np.lexsort((cand[others], np.round(dist[others], 9)))]
+        n = max(int(self.frontier_max_cones) - junction.size, 0)
+        return np.union1d(junction, cand[order[:n]])
 
     def _start_index(self, points, pose, side) -> int:
+        """Where the returned boundary starts: the cone nearest the car, or the next one (at
+        most two steps on) while that lies behind the car, the protocol's convention for the
+        ground truth (docs/protocol.md, step 5)."""
         xy = points[side]
         j = int(np.argmin(np.hypot(*(xy - pose.xy).T)))
-        if j > 0 and (xy[j] - pose.xy) @ pose.heading > 0:
-            j -= 1
+        for _ in range(2):
+            if (xy[j] - pose.xy) @ pose.heading >= 0:
+                break
+            if j + 1 < side.size:
+                j += 1
+            elif self.closed:
+                j = 0
+            else:
+                break
         return j
 
     def _ahead(self, points, pose, side) -> int:
@@ -203,7 +297,7 @@ class IncrementalRld:
         if self.closed:
             return self._view(points, pose, L, R, LaneStatus.FEASIBLE, "closed", stats)
         self._last_frontier = {}
-        new, attempts = self._extend(points, L, R, time_limit_s)
+        new, attempts, closes = self._extend(points, L, R, time_limit_s)
         if new is None:
             # No consistent frontier even after the rollbacks: start over from the car.
             self.restarts += 1
@@ -235,7 +329,7 @@ class IncrementalRld:
             return self._view(points, pose, lane.left, lane.right, lane.status, "start", stats)
         stats["n_cones_used"] = int(self._last_frontier.get("n_cones_used", 0))
         stats["frontier_status"] = "ok"
-        if self._closable(points, L, R):
+        if closes:
             self.closed = True
         self.left_xy, self.right_xy = points[L], points[R]
         return self._view(points, pose, L, R, LaneStatus.FEASIBLE,

@@ -209,6 +209,7 @@ def build_program(
     sided: bool = False,
     colors: np.ndarray | None = None,
     confidence: np.ndarray | None = None,
+    heading: bool = True,
 ) -> LaneProgram:
     """Build the RLD program over ``points`` (N, 2) for the car at ``pose``.
 
@@ -222,6 +223,9 @@ def build_program(
     columns per side, each side one path starting near the car on its own side, and the lane
     width bounded at the cones (see docs/formulation.md). ``colors`` (0 unknown, 1 left, 2
     right) and ``confidence`` (0..1) per cone add the colour and confidence costs.
+    ``heading=False`` drops the heading row (eq. 9 / 33) and the heading cost (eq. 25): for a
+    program whose start is fixed together with its first edges (``rld.incremental``'s
+    frontier), which give the direction that the heading terms stand in for.
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
     N = points.shape[0]
@@ -255,12 +259,14 @@ def build_program(
     if start is not None:
         near = np.zeros(N, dtype=bool)
         near[list(start)] = True
-    edge_cost = costs.edge_objective(points, edges, pose, p, colors)
+    edge_cost = costs.edge_objective(points, edges, pose, p, colors, heading=heading)
     cone_cost = np.zeros(N)
     if confidence is not None:
         cone_cost += p.w_confidence * costs.confidence_cost(confidence)
     h = np.flatnonzero(cons.heading_mask(points, edges, pose, p.heading_radius_m,
                                          p.heading_tolerance_rad))
+    if not heading:
+        h = None
     wc = cons.width_conflicts(points, edges, p.min_width_m)
     cr = cons.crossing_edge_pairs(points, edges) if no_crossing else np.zeros((0, 2), int)
     # Far cone pairs that may not both be far endpoints (eqs 12-17).
@@ -299,7 +305,8 @@ def build_program(
         # eqs 12-17: the two far endpoints are at most far_endpoint_max_m apart.
         rows.add_pairs(m0 + fi, m0 + fj, 1.0, "far_endpoints")
         # eq. 9 / 33: at least two edges near the car along the heading.
-        rows.add(np.zeros(h.size), a0 + h, np.ones(h.size), 2.0, np.inf, "heading")
+        if h is not None:
+            rows.add(np.zeros(h.size), a0 + h, np.ones(h.size), 2.0, np.inf, "heading")
         # eqs 6-8: minimum width.
         rows.add_pairs(a0 + wc[:, 0], a0 + wc[:, 1], 1.0, "width_conflict")
         rows.add_pairs(a0 + cr[:, 0], a0 + cr[:, 1], 1.0, "crossing")
@@ -396,7 +403,8 @@ def _sided_rows(rows: _Rows, points, pose, p, blocks, near, start, h, wc, cr, fi
         # its own side (eq. 11 per side), with an edge along the heading near the car (eq. 9).
         rows.add(np.zeros(N), m0 + np.arange(N), np.ones(N), 2.0, 2.0, "two_endpoints")
         rows.add(np.zeros(nz.size), m0 + nz, np.ones(nz.size), 1.0, 1.0, "near_endpoints")
-        rows.add(np.zeros(h.size), a0 + h, np.ones(h.size), 1.0, np.inf, "heading")
+        if h is not None:
+            rows.add(np.zeros(h.size), a0 + h, np.ones(h.size), 1.0, np.inf, "heading")
     # A cone belongs to one side at most.
     rows.add_pairs(gL + np.arange(N), gR + np.arange(N), 1.0, "one_side")
     # eqs 12-17: the far endpoints (one per side) at most d_max apart.

@@ -111,12 +111,17 @@ class RldModel:
         colors: np.ndarray | None = None,
         confidence: np.ndarray | None = None,
         fixed_edges: list[tuple[int, int]] | None = None,
+        window: np.ndarray | None = None,
+        heading: bool = True,
     ) -> Lane:
         """Solve on validated ``points``. ``start`` (indices into ``points``) fixes the two near
         endpoints, for the cross-check with CLC's starting vertices and the incremental solver.
         ``colors`` and ``confidence`` (validated, one per cone) add their costs.
         ``fixed_edges`` (pairs of indices into ``points``) must be in the lane (their columns'
-        lower bound is 1; ``rld.incremental`` ties its frontier to the confirmed lane so)."""
+        lower bound is 1; ``rld.incremental`` ties its frontier to the confirmed lane so).
+        ``window`` (indices into ``points``) replaces the cone window of the module docstring
+        and ``heading=False`` drops the heading row and cost (``build_program``): both for the
+        incremental solver's frontier, which is not seen from the car."""
         budget = DEFAULT_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
         t0 = time.perf_counter()
         if start is None and near_car_mask(points, pose, self.params.near_radius_m).sum() < 2:
@@ -126,7 +131,12 @@ class RldModel:
                 "the car",
                 stats={"backend": self.backend.name},
             )
-        window, horizon = cone_window(points, pose, self.params)
+        if window is None:
+            window, horizon = cone_window(points, pose, self.params)
+        else:
+            window = np.unique(np.asarray(window, dtype=np.int64))
+            horizon = float(np.hypot(*(points[window] - pose.xy).T).max()) if window.size \
+                else 0.0
         if start is not None:
             window = np.union1d(window, np.asarray(start))
         if fixed_edges:
@@ -144,7 +154,8 @@ class RldModel:
                                 start=local_start, strengthen=self.backend.strengthen,
                                 sided=self.sided,
                                 colors=None if colors is None else colors[window],
-                                confidence=None if confidence is None else confidence[window])
+                                confidence=None if confidence is None else confidence[window],
+                                heading=heading)
         stats.update(program.stats)
         if fixed_edges:
             eid = {(int(i), int(j)): k for k, (i, j) in enumerate(program.edges)}

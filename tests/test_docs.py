@@ -1,6 +1,6 @@
 """The docs stay true to the code: every ``LaneParams`` field with its default and every
 registered method appear in docs/api.md; the README opens with the two commands of a fresh
-machine."""
+machine; every repository path and link the README and docs/*.md name exists."""
 
 from __future__ import annotations
 
@@ -39,3 +39,22 @@ def test_readme_opens_with_the_two_commands():
     block = lines[lines.index("```bash") + 1: lines.index("```bash") + 3]
     assert block[0].startswith("pip install . && rld demo")
     assert block[1].startswith("pip install -e '.[dev]' && pytest")
+
+
+#: A repository path as the docs write it: a top-level folder of the checkout, then a file or
+#: folder name (``docs/huang.md``, ``rld/tracker.py``, ``clc/models``).
+_REPO_PATH = re.compile(r"(?<![\w./-])((?:docs|rld|clc|tests|notebooks|benchmarks)/[\w./-]*\w)")
+#: The target of a Markdown link or image, ``[text](target)``.
+_LINK = re.compile(r"\]\(([^)\s#]+)[^)]*\)")
+
+
+def test_paths_named_in_the_docs_exist():
+    missing = []
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+        text = page.read_text()
+        named = [ROOT / p for p in _REPO_PATH.findall(text)]  # from the repository root
+        named += [page.parent / t for t in _LINK.findall(text)  # from the page
+                  if not re.match(r"[a-z]+:", t)]
+        missing += [f"{page.relative_to(ROOT)}: {p.relative_to(ROOT)}" for p in named
+                    if not p.exists()]
+    assert not missing, "the docs name files that do not exist:\n" + "\n".join(missing)
