@@ -30,6 +30,7 @@ __all__ = [
     "edge_lengths",
     "width_conflicts",
     "crossing_edge_pairs",
+    "blocked_by_fixed",
     "heading_mask",
     "near_car_mask",
     "angle_triples",
@@ -112,6 +113,29 @@ def crossing_edge_pairs(points: np.ndarray, edges: np.ndarray) -> np.ndarray:
     hit = geo.segments_intersect(points[e[:, 0]], points[e[:, 1]], points[f[:, 0]],
                                  points[f[:, 1]])
     return pairs[hit]
+
+
+def blocked_by_fixed(points: np.ndarray, edges: np.ndarray, fixed: np.ndarray,
+                     min_width_m: float) -> np.ndarray:
+    """Which ``edges`` can no longer be in a lane that already holds the ``fixed`` edges:
+    those that cross one of them or come closer than ``min_width_m`` to one (other than end
+    to end), by exactly the families of ``crossing_edge_pairs`` and ``width_conflicts`` (RLD
+    eqs 6-8 and section V) on the union of both edge sets. ``edges`` and ``fixed``: (E, 2)
+    and (F, 2) int64 indices into ``points``; returns (E,) bool. The incremental solver
+    (``rld.incremental``) blocks its frontier's candidate edges against the kept lane so."""
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    fixed = np.asarray(fixed, dtype=np.int64).reshape(-1, 2)
+    out = np.zeros(edges.shape[0], dtype=bool)
+    if edges.shape[0] == 0 or fixed.shape[0] == 0:
+        return out
+    union = np.vstack([np.sort(edges, axis=1), np.sort(fixed, axis=1)])
+    bad = np.vstack([crossing_edge_pairs(points, union),
+                     width_conflicts(points, union, min_width_m)])
+    E = edges.shape[0]
+    for a, b in ((bad[:, 0], bad[:, 1]), (bad[:, 1], bad[:, 0])):
+        hit = (a < E) & (b >= E)
+        out[a[hit]] = True
+    return out
 
 
 def heading_mask(

@@ -57,7 +57,7 @@ __all__ = ["IncrementalRld", "POSE_JUMP_M", "POSE_JUMP_RAD"]
 POSE_JUMP_M = 5.0
 POSE_JUMP_RAD = math.radians(45.0)
 #: Fewer cones than this ahead of the car on a side: the car has reached the lane's end.
-MIN_AHEAD = 3
+MIN_AHEAD = 6
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -81,7 +81,7 @@ class IncrementalRld:
         if self.frontier_max_cones < 6:
             raise ValueError("frontier_max_cones must be at least 6")
         self.max_rollbacks = int(max_rollbacks)
-        self.window = RldModel(params, backend=backend)  # from the car: starts
+        self.window = RldModel(params, backend=backend)  # from the car: (re)starts
         self.frontier = RldModel(params, backend=backend)  # from the virtual pose
         self.restarts = 0
         self.rollbacks = 0
@@ -139,14 +139,13 @@ class IncrementalRld:
             d = dl + dr
             vpose = Pose(float(mid[0]), float(mid[1]), float(math.atan2(d[1], d[0])))
             window = self._frontier_window(points, free, (ql, al, dl), (qr, ar, dr))
-            loc = {int(v): k for k, v in enumerate(free)}
             lane = self.frontier.solve(
-                points[free], vpose, time_limit_s=time_limit_s, start=(loc[ql], loc[qr]),
-                fixed_edges=[(loc[ql], loc[al]), (loc[qr], loc[ar])],
-                window=np.searchsorted(free, window), heading=False)
+                points, vpose, time_limit_s=time_limit_s, start=(ql, qr),
+                fixed_edges=[(ql, al), (qr, ar)], window=window, heading=False,
+                fixed_lane=self._kept_edges(points, kl[:-1], kr[:-1], window))
             if not lane.ok:
                 continue
-            fl, fr = free[lane.left], free[lane.right]
+            fl, fr = lane.left, lane.right
             if fl[0] == qr and fr[0] == ql:  # named by the program's pose: ours by the start
                 fl, fr = fr, fl
             if not (fl[0] == ql and fr[0] == qr and fl.size >= 2 and fr.size >= 2
@@ -174,6 +173,18 @@ class IncrementalRld:
                                                     closed=True)
             return (newL, newR), attempt, closes
         return None, self.max_rollbacks + 1, False
+
+    def _kept_edges(self, points, kl, kr, window) -> np.ndarray:
+        """The kept lane's edges (both sides, up to the junctions) that come near the frontier
+        window: the frontier may not cross them or pinch the lane against them."""
+        e = np.vstack([np.column_stack([kl[:-1], kl[1:]]), np.column_stack([kr[:-1], kr[1:]])])
+        if e.shape[0] == 0:
+            return e
+        lo, hi = points[window].min(axis=0), points[window].max(axis=0)
+        pad = self.params.max_cone_spacing_m + self.params.min_width_m
+        a, b = points[e[:, 0]], points[e[:, 1]]
+        near = np.all((np.minimum(a, b) <= hi + pad) & (np.maximum(a, b) >= lo - pad), axis=1)
+        return e[near]
 
     def _consistent(self, points, L, R, fl0, fr0, ends) -> bool:
         """The frontier against the whole lane: no frontier edge (from index ``fl0`` / ``fr0``
@@ -261,74 +272,58 @@ class IncrementalRld:
 
     # -- the call ------------------------------------------------------------------------
 
+    def _start(self, points, pose, time_limit_s, stats, reason=None) -> Lane:
+        """Start (or, with a ``reason``, restart) from the car: the windowed RLD."""
+        if reason is not None:
+            self.restarts += 1
+            stats["restart_reason"] = reason
+            self.reset()
+        self.prev_pose, self.n_map = pose, points.shape[0]
+        lane = self.window.solve(points, pose, time_limit_s=time_limit_s)
+        stats.update({k: lane.stats[k] for k in ("n_cones_used", "horizon_m")
+                      if k in lane.stats})
+        if not lane.ok:
+            lane.stats.update(stats, mode="start", restarts=self.restarts,
+                              rollbacks=self.rollbacks)
+            return lane
+        self.left_xy, self.right_xy = points[lane.left], points[lane.right]
+        return self._view(points, pose, lane.left, lane.right, lane.status, "start", stats)
+
     def solve(self, points: np.ndarray, pose: Pose, time_limit_s: float | None = None,
               colors=None, confidence=None) -> Lane:
+        """One map update: ``points`` (N, 2) metres, validated; ``pose`` the car's. The
+        budget ``time_limit_s`` bounds each program solve (a call with rollbacks makes up to
+        ``max_rollbacks + 2`` of them)."""
         stats: dict = {}
         if colors is not None or confidence is not None:
             stats["note"] = "the incremental solver ignores colors and confidence"
-        matched = None
-        if self.left_xy is not None:
-            reason = None
-            if self._jumped(pose):
-                reason = "pose jump"
-            elif points.shape[0] < self.n_map:
-                reason = "the map lost cones"
-            else:
-                matched = self._match(points)
-                if matched is None:
-                    reason = "a lane cone moved or vanished"
-            if reason is not None:
-                self.restarts += 1
-                stats["restart_reason"] = reason
-                self.reset()
-        self.prev_pose = pose
-        self.n_map = points.shape[0]
+        if self.left_xy is None:
+            return self._start(points, pose, time_limit_s, stats)
+        if self._jumped(pose):
+            return self._start(points, pose, time_limit_s, stats, "pose jump")
+        if points.shape[0] < self.n_map:
+            return self._start(points, pose, time_limit_s, stats, "the map lost cones")
+        matched = self._match(points)
         if matched is None:
-            lane = self.window.solve(points, pose, time_limit_s=time_limit_s)
-            stats.update({k: lane.stats[k] for k in ("n_cones_used", "horizon_m")
-                          if k in lane.stats})
-            if not lane.ok:
-                lane.stats.update(stats, mode="start", restarts=self.restarts,
-                                  rollbacks=self.rollbacks)
-                return lane
-            self.left_xy, self.right_xy = points[lane.left], points[lane.right]
-            return self._view(points, pose, lane.left, lane.right, lane.status, "start", stats)
+            return self._start(points, pose, time_limit_s, stats,
+                               "a lane cone moved or vanished")
+        self.prev_pose, self.n_map = pose, points.shape[0]
         L, R = matched
         if self.closed:
             return self._view(points, pose, L, R, LaneStatus.FEASIBLE, "closed", stats)
         self._last_frontier = {}
         new, attempts, closes = self._extend(points, L, R, time_limit_s)
+        self.rollbacks += min(attempts, self.max_rollbacks)
         if new is None:
             # No consistent frontier even after the rollbacks: start over from the car.
-            self.restarts += 1
-            stats["restart_reason"] = "no frontier after rollbacks"
-            self.reset()
-            self.prev_pose, self.n_map = pose, points.shape[0]
-            lane = self.window.solve(points, pose, time_limit_s=time_limit_s)
-            if not lane.ok:
-                lane.stats.update(stats, mode="start", restarts=self.restarts,
-                                  rollbacks=self.rollbacks)
-                return lane
-            self.left_xy, self.right_xy = points[lane.left], points[lane.right]
-            return self._view(points, pose, lane.left, lane.right, lane.status, "start", stats)
-        self.rollbacks += attempts
+            return self._start(points, pose, time_limit_s, stats, "no frontier after rollbacks")
         L, R = new
         if min(self._ahead(points, pose, L), self._ahead(points, pose, R)) < MIN_AHEAD:
-            # The car has reached the end of the kept lane (the frontier cannot pass a gap in
-            # the map): start over from the car, as the windowed solver would.
-            self.restarts += 1
-            stats["restart_reason"] = "the car reached the end of the lane"
-            self.reset()
-            self.prev_pose, self.n_map = pose, points.shape[0]
-            lane = self.window.solve(points, pose, time_limit_s=time_limit_s)
-            if not lane.ok:
-                lane.stats.update(stats, mode="start", restarts=self.restarts,
-                                  rollbacks=self.rollbacks)
-                return lane
-            self.left_xy, self.right_xy = points[lane.left], points[lane.right]
-            return self._view(points, pose, lane.left, lane.right, lane.status, "start", stats)
+            # The car has nearly reached the end of the lane: the frontier has not kept up (a
+            # gap in the map, or a wrong turn it cannot leave): start over from the car.
+            return self._start(points, pose, time_limit_s, stats,
+                               "the car reached the end of the lane")
         stats["n_cones_used"] = int(self._last_frontier.get("n_cones_used", 0))
-        stats["frontier_status"] = "ok"
         if closes:
             self.closed = True
         self.left_xy, self.right_xy = points[L], points[R]

@@ -21,7 +21,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from rld.backends import make_backend
-from rld.constraints import near_car_mask
+from rld.constraints import blocked_by_fixed, near_car_mask
 from rld.program import build_program, cycle_cut, extract_paths
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
@@ -113,6 +113,7 @@ class RldModel:
         fixed_edges: list[tuple[int, int]] | None = None,
         window: np.ndarray | None = None,
         heading: bool = True,
+        fixed_lane: np.ndarray | None = None,
     ) -> Lane:
         """Solve on validated ``points``. ``start`` (indices into ``points``) fixes the two near
         endpoints, for the cross-check with CLC's starting vertices and the incremental solver.
@@ -121,7 +122,10 @@ class RldModel:
         lower bound is 1; ``rld.incremental`` ties its frontier to the confirmed lane so).
         ``window`` (indices into ``points``) replaces the cone window of the module docstring
         and ``heading=False`` drops the heading row and cost (``build_program``): both for the
-        incremental solver's frontier, which is not seen from the car."""
+        incremental solver's frontier, which is not seen from the car. ``fixed_lane`` (K, 2)
+        indices into ``points``: lane edges already chosen outside the program; candidate
+        edges that cross them or violate the minimum width against them are closed
+        (``rld.constraints.blocked_by_fixed``)."""
         budget = DEFAULT_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
         t0 = time.perf_counter()
         if start is None and near_car_mask(points, pose, self.params.near_radius_m).sum() < 2:
@@ -168,6 +172,12 @@ class RldModel:
                                           "edge of the program", status=LaneStatus.INFEASIBLE,
                                           stats=stats)
                 program.col_lo[cols.start + k] = 1.0
+        if fixed_lane is not None and len(fixed_lane):
+            blocked = blocked_by_fixed(points, window[program.edges], fixed_lane,
+                                       self.params.min_width_m)
+            for side in (0, 1) if program.sided else (0,):
+                program.col_hi[program.block("a", side)][blocked] = 0.0
+            stats["blocked_edges"] = int(blocked.sum())
         stats["build_time_s"] = time.perf_counter() - t0
         if program.near.sum() < 2:
             return Lane.not_found(
