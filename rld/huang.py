@@ -2,17 +2,18 @@
 
 1. Centreline evidence (2.2.1): every cone is boundary evidence, like a short piece of road
    paint, so the lane centre is most likely half a lane width from it: D(p) = sum of f_rp(|p -
-   c|) over the cones c (eq. 3, with the paper's 1.83 m half width), on a grid in the car frame
-   (``rld.huang_kernels``). Where a left and a right cone both lie half a width away the
-   evidence doubles, so a threshold keeps the centreline and drops the ridges outside the track.
+   c|) over the cones c (eq. 3; the paper's half width is 1.83 m, ours ``half_width_m`` =
+   1.9 m), on a grid in the car frame (``rld.huang_kernels``). Where a left and a right cone
+   both lie half a width away the evidence doubles, so a threshold keeps the centreline and
+   drops the ridges outside the track.
 2. Ridge points (2.2.2): grid points above the threshold that are local maxima along their row
    or column.
 3. RANSAC parabolas (2.2.2): 200 draws of three ridge points, a parabola in the frame of their
-   first principal component, inliers within ``alpha_m``, a least-squares refit, the largest
-   connected set of inliers (1 m links), the score sum 1 / (1 + d). Deviations: d is the
-   distance along the principal-component normal, not the algebraic distance of the conic; one
-   of the three points is drawn near the car, because the lane wanted is the car's own (the
-   paper keeps up to five lanes and lets its tracker choose).
+   first principal component, inliers within ``alpha_m``, two least-squares refits, the
+   largest connected set of inliers (links of ``link_m`` = 1.5 m), the score sum 1 / (1 + d).
+   Deviations: d is the distance along the principal-component normal, not the algebraic
+   distance of the conic; one of the three points is drawn near the car, because the lane
+   wanted is the car's own (the paper keeps up to five lanes and lets its tracker choose).
 4. Cones to boundaries (ours): every cone is projected onto the fitted centreline; those between
    half the minimum and half the maximum lane width to its left (right) form the left (right)
    boundary, ordered by arc length and cut at the first gap wider than the maximum spacing.
@@ -136,6 +137,42 @@ def fit_centerline(ridge: np.ndarray, car_xy: np.ndarray, near_m: float,
     return line, score
 
 
+def cones_beside(points: np.ndarray, line: np.ndarray,
+                 params: LaneParams) -> tuple[np.ndarray, np.ndarray]:
+    """Step 4 of the module docstring: the cones (indices into ``points``, metres) between
+    half the minimum and half the maximum lane width to the left and to the right of the
+    centreline ``line`` (m, 2), from at most 1 m before its start to at most 1 m past its end
+    (measured along its end segments, so a cone beyond an end does not join a side by its
+    distance to the end point), ordered along the line and cut at the first gap wider than
+    ``max_cone_spacing_m``."""
+    q, dist, arc = project_onto(points, line)
+    # Signed side: the cross product of the centreline's direction with the cone's offset.
+    seg = np.searchsorted(geo.cumulative_length(line), arc, side="right").clip(1, len(line) - 1)
+    tang = line[seg] - line[seg - 1]
+    off = points - q
+    side = np.sign(tang[:, 0] * off[:, 1] - tang[:, 1] * off[:, 0])
+    length = geo.polyline_length(line)
+    along = arc.copy()
+    t0 = (line[1] - line[0]) / max(float(np.hypot(*(line[1] - line[0]))), 1e-12)
+    t1 = (line[-1] - line[-2]) / max(float(np.hypot(*(line[-1] - line[-2]))), 1e-12)
+    first, last = arc <= 1e-9, arc >= length - 1e-9
+    along[first] = np.minimum((points[first] - line[0]) @ t0, 0.0)
+    along[last] = length + np.maximum((points[last] - line[-1]) @ t1, 0.0)
+    ok_s = (along >= -1.0) & (along <= length + 1.0)
+    band = (dist >= params.min_width_m / 2) & (dist <= params.max_width_m / 2)
+    sides = []
+    for sgn in (1.0, -1.0):
+        idx = np.flatnonzero(ok_s & band & (side == sgn))
+        idx = idx[np.argsort(arc[idx], kind="stable")]
+        keep = [int(idx[0])] if idx.size else []
+        for k in idx[1:]:
+            if np.hypot(*(points[k] - points[keep[-1]])) > params.max_cone_spacing_m:
+                break
+            keep.append(int(k))
+        sides.append(np.array(keep, dtype=np.int64))
+    return sides[0], sides[1]
+
+
 def huang_lane(points: np.ndarray, pose: Pose, params: LaneParams,
                hp: HuangParams | None = None) -> Lane:
     """The baseline's lane in ``points`` (N, 2, validated) for the car at ``pose``."""
@@ -167,26 +204,7 @@ def huang_lane(points: np.ndarray, pose: Pose, params: LaneParams,
         return Lane.not_found(points, "the fitted centreline does not lead ahead", stats=stats)
     c, s = np.cos(pose.yaw), np.sin(pose.yaw)
     line = pose.xy + line_local @ np.array([[c, s], [-s, c]])
-    q, dist, arc = project_onto(points, line)
-    # Signed side: the cross product of the centreline's direction with the cone's offset.
-    seg = np.searchsorted(geo.cumulative_length(line), arc, side="right").clip(1, len(line) - 1)
-    tang = line[seg] - line[seg - 1]
-    off = points - q
-    side = np.sign(tang[:, 0] * off[:, 1] - tang[:, 1] * off[:, 0])
-    length = geo.polyline_length(line)
-    ok_s = (arc >= 0.0) & (arc <= length + 1.0)
-    band = (dist >= params.min_width_m / 2) & (dist <= params.max_width_m / 2)
-    sides = []
-    for sgn in (1.0, -1.0):
-        idx = np.flatnonzero(ok_s & band & (side == sgn))
-        idx = idx[np.argsort(arc[idx], kind="stable")]
-        keep = [int(idx[0])] if idx.size else []
-        for k in idx[1:]:
-            if np.hypot(*(points[k] - points[keep[-1]])) > params.max_cone_spacing_m:
-                break
-            keep.append(int(k))
-        sides.append(np.array(keep, dtype=np.int64))
-    left, right = sides
+    left, right = cones_beside(points, line, params)
     if left.size < 2 or right.size < 2:
         return Lane.not_found(points, "fewer than two cones beside the fitted centreline on a "
                               "side", stats=stats)

@@ -15,6 +15,7 @@ from rld.generator import generate_track
 from rld.huang import HuangParams, fit_centerline
 from rld.metrics import score_lane
 from rld.simulation import simulate_lap
+from rld.types import LaneParams
 
 
 def f_rp(x, h=1.83, var=0.14):
@@ -100,3 +101,26 @@ def test_no_lane_far_from_the_cones():
                        np.column_stack([xs, np.full(xs.size, -1.9)])])
     lane = solve_lane(cones, (200.0, 50.0, 0.0), method="huang")
     assert not lane.ok and lane.message
+
+
+def test_cones_beside_a_centreline_hand_worked():
+    # Centreline along x from 0 to 10 m; defaults: a side takes cones 1.25-3.25 m from it.
+    from rld.huang import cones_beside
+
+    line = np.array([[0.0, 0.0], [5.0, 0.0], [10.0, 0.0]])
+    points = np.array([
+        [1.0, 1.5],    # 0 left
+        [4.0, 1.6],    # 1 left
+        [7.0, 1.5],    # 2 left
+        [2.0, -1.5],   # 3 right
+        [6.0, -1.7],   # 4 right
+        [5.0, 0.5],    # 5 too near the centreline (0.5 m)
+        [5.0, 4.0],    # 6 too far (4 m)
+        [10.5, 1.5],   # 7 left, 0.5 m past the end: within the 1 m allowance
+        [11.5, 1.0],   # 8 1.5 m past the end: out, though 1.8 m from the end point
+        [12.5, 1.5],   # 9 2.5 m past the end: out, though 2.9 m from the end point
+        [-0.5, -1.5],  # 10 right, 0.5 m before the start
+    ])
+    left, right = cones_beside(points, line, LaneParams())
+    assert left.tolist() == [0, 1, 2, 7]
+    assert right.tolist() == [10, 3, 4]
