@@ -244,10 +244,14 @@ def eval_cmd(dataset: str | None, methods: str, track_ids: str | None, n_generat
     if not tracks:
         raise click.ClickException("no tracks: give a dataset folder (or put the dataset in "
                                    "../shared/data/...) or --generated N")
-    records = report.evaluate(
-        tracks, specs, ranges=[float(v) for v in ranges.split(",")],
-        fp_rates=[float(v) for v in fp_rates.split(",")], every=every, seed=seed,
-        processes=processes, plot_failures=str(Path(out) / "failures") if plot_failures else None)
+    try:
+        records = report.evaluate(
+            tracks, specs, ranges=[float(v) for v in ranges.split(",")],
+            fp_rates=[float(v) for v in fp_rates.split(",")], every=every, seed=seed,
+            processes=processes,
+            plot_failures=str(Path(out) / "failures") if plot_failures else None)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc)) from exc
     command = "rld eval " + " ".join(shlex.quote(a) for a in sys.argv[2:])
     header = (f"Command: `{command}`. Machine: {report.machine()}. "
               f"Date: {datetime.date.today().isoformat()}. Tracks: "
@@ -341,6 +345,42 @@ def bench_protocol(method: str, backend: str | None, fp_rates: str, range_m: flo
     if out:
         with open(out, "w") as fh:
             fh.write(table + "\n")
+
+
+@bench.command("incremental")
+@click.option("--range-m", default=50.0, show_default=True, help="Perception range, metres.")
+@click.option("--fp-rates", default="0,0.1,0.3", show_default=True)
+@click.option("--every", default=1, show_default=True,
+              help="Every k-th pose. The solver is stateful: keep 1 for real figures; k > 1 "
+                   "only for quick runs (the car jumps k metres per call).")
+@click.option("--tracks", "track_ids", default=",".join(str(k) for k in (1, 2, 3, 4, 6, 7)),
+              show_default=True, help="Shared dataset track numbers.")
+@click.option("--quick", is_flag=True, help="A tiny run: the first track, its first 50 poses.")
+@click.option("--out", default=None, help="Also write the Markdown tables to this file.")
+def bench_incremental(range_m: float, fp_rates: str, every: int, track_ids: str, quick: bool,
+                      out: str | None) -> None:
+    """Incremental RLD latency per map update and against the kept lane's length."""
+    import shlex
+
+    mod = _benchmark_module("bench_incremental")
+    if not mod.dataset_available():
+        click.echo("rld bench incremental: skipped, the racetrack dataset was not found (set "
+                   "RLD_DATASET_DIR or put it in ../shared/data/fsd_racetrack_dataset)", err=True)
+        return
+    if every < 1:
+        raise click.BadParameter("must be >= 1", param_hint="--every")
+    try:
+        records = mod.run(range_m=range_m, fp_rates=[float(v) for v in fp_rates.split(",")],
+                          every=every, tracks=[int(v) for v in track_ids.split(",") if v.strip()],
+                          quick=quick)
+    except FileNotFoundError as exc:
+        raise click.ClickException(str(exc)) from exc
+    command = "rld bench incremental " + " ".join(shlex.quote(a) for a in sys.argv[3:])
+    text = mod.to_markdown(records, range_m, command=command.strip())
+    click.echo(text)
+    if out:
+        with open(out, "w") as fh:
+            fh.write(text + "\n")
 
 
 @bench.command("clc")

@@ -41,3 +41,15 @@ def test_solve_reports_bad_input(tmp_path):
     assert result.exit_code == 1 and "at least 4" in result.output
     result = CliRunner().invoke(main, ["solve", str(path), "--pose", "0,0"])
     assert result.exit_code == 2 and "x,y,yaw" in result.output
+
+
+def test_bench_incremental_quick(dataset_dir):
+    result = CliRunner().invoke(main, ["bench", "incremental", "--quick", "--fp-rates", "0"])
+    assert result.exit_code == 0, result.output
+    assert "| 0% | all |" in result.output and "lane cones" in result.output
+
+
+def test_eval_refuses_a_stride_that_restarts_the_incremental_solver():
+    result = CliRunner().invoke(main, ["eval", "--generated", "1", "--methods",
+                                       "rld-incremental", "--every", "5"])
+    assert result.exit_code != 0 and "pose by pose" in result.output
