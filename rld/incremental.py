@@ -87,8 +87,11 @@ class IncrementalRld:
         self.frontier_cones = int(frontier_cones)
         self.frontier_max_cones = int(params.max_cones if frontier_max_cones is None
                                       else frontier_max_cones)
-        if self.frontier_max_cones < 6:
-            raise ValueError("frontier_max_cones must be at least 6")
+        if self.frontier_max_cones < 2 * self.frontier_cones + 5:
+            # The window holds the 4 junction cones and must have room for more free cones
+            # than the 2 x frontier_cones released, or the lane cannot grow.
+            raise ValueError(f"frontier_max_cones must be at least 2 * frontier_cones + 5 = "
+                             f"{2 * self.frontier_cones + 5}")
         self.max_rollbacks = int(max_rollbacks)
         self.window = RldModel(params, backend=backend)  # from the car: (re)starts
         self.frontier = RldModel(params, backend=backend)  # from the virtual pose
@@ -147,7 +150,9 @@ class IncrementalRld:
             dl, dr = _unit(points[al] - points[ql]), _unit(points[ar] - points[qr])
             d = dl + dr
             vpose = Pose(float(mid[0]), float(mid[1]), float(math.atan2(d[1], d[0])))
-            window = self._frontier_window(points, free, (ql, al, dl), (qr, ar, dr))
+            released = np.concatenate([L[kl.size:], R[kr.size:]])
+            window = self._frontier_window(points, free, (ql, al, dl), (qr, ar, dr),
+                                           released)
             lane = self.frontier.solve(
                 points, vpose, time_limit_s=time_limit_s, start=(ql, qr),
                 fixed_edges=[(ql, al), (qr, ar)], window=window, heading=False,
@@ -212,7 +217,7 @@ class IncrementalRld:
                          width_conflicts(points, edges, self.params.min_width_m)])
         return not np.any(new[bad[:, 0]] | new[bad[:, 1]])
 
-    def _frontier_window(self, points, free, left, right) -> np.ndarray:
+    def _frontier_window(self, points, free, left, right, released=()) -> np.ndarray:
         """The frontier program's cones (indices into ``points``): the two junctions
         (predecessor and anchor per side) and the free cones nearest to the anchors along the
         map, ``frontier_max_cones`` in all. Nearest by path length over the candidate edges
@@ -238,7 +243,10 @@ class IncrementalRld:
             return junction
         w = np.hypot(*(xy[pairs[:, 0]] - xy[pairs[:, 1]]).T)
         graph = coo_matrix((w, (pairs[:, 0], pairs[:, 1])), shape=(cand.size, cand.size))
-        src = np.searchsorted(cand, anchors)
+        # From the anchors and from the released cones (the last frontier, which the new one
+        # will usually keep and extend): the window reaches past the lane's current end.
+        seeds = np.union1d(anchors, np.intersect1d(np.asarray(released, dtype=np.int64), cand))
+        src = np.searchsorted(cand, seeds)
         dist = dijkstra(graph, directed=False, indices=src, min_only=True)
         others = np.flatnonzero(np.isfinite(dist) & ~np.isin(cand, junction))
         order = others[np.lexsort((cand[others], np.round(dist[others], 9)))]

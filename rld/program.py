@@ -162,13 +162,15 @@ class _Rows:
         self.n = 0
 
     def add(self, rows, cols, vals, lo, hi, family: str) -> None:
-        """``rows`` are local row numbers 0..k-1 of this batch."""
+        """``rows`` are local row numbers 0..k-1 of this batch; scalar bounds apply to all k
+        (k counts the row numbers too, so a scalar bound never drops a row)."""
         lo = np.atleast_1d(np.asarray(lo, dtype=np.float64))
         hi = np.atleast_1d(np.asarray(hi, dtype=np.float64))
-        k = max(lo.size, hi.size)
+        rows = np.asarray(rows, dtype=np.int64)
+        k = max(lo.size, hi.size, int(rows.max()) + 1 if rows.size else 0)
         if k == 0:
             return
-        self.r.append(np.asarray(rows, dtype=np.int64) + self.n)
+        self.r.append(rows + self.n)
         self.c.append(np.asarray(cols, dtype=np.int64))
         self.v.append(np.asarray(vals, dtype=np.float64))
         self.lo.append(np.broadcast_to(lo, (k,)).copy())
@@ -301,7 +303,8 @@ def build_program(
         nz = np.flatnonzero(near)
         rows.add(np.zeros(nz.size), m0 + nz, np.ones(nz.size), 2.0, 2.0, "near_endpoints")
         if start is not None:
-            rows.add(np.arange(2), m0 + np.array(start), np.ones(2), 1.0, 1.0, "fixed_start")
+            rows.add(np.arange(2), m0 + np.array(start), np.ones(2), np.ones(2), np.ones(2),
+                     "fixed_start")
         # eqs 12-17: the two far endpoints are at most far_endpoint_max_m apart.
         rows.add_pairs(m0 + fi, m0 + fj, 1.0, "far_endpoints")
         # eq. 9 / 33: at least two edges near the car along the heading.

@@ -9,7 +9,10 @@ from shapely.geometry import LineString, Point
 
 from rld import constraints as C
 from rld import geometry as geo
-from rld.types import LaneParams, Pose
+from rld.generator import generate_track
+from rld.simulation import simulate_lap
+from rld.solver import RldModel
+from rld.types import LaneParams, LaneStatus, Pose
 
 CAR = Pose(0.0, 0.0, 0.0)
 
@@ -95,6 +98,137 @@ def test_width_conflicts_and_crossings_match_brute_force(seed, n):
 
     assert C.width_conflicts(pts, edges, 2.5).tolist() == _brute_pairs(pts, edges, narrow)
     assert C.crossing_edge_pairs(pts, edges).tolist() == _brute_pairs(pts, edges, crossing)
+
+
+# --- edges blocked by a fixed part of the lane (the incremental frontier) ---------------------
+
+
+def test_blocked_by_fixed_hand_worked():
+    pts = np.array(
+        [
+            [0, 0], [4, 0],  # 0-1: the fixed edge, along the x axis
+            [2, -1], [2, 1],  # 2-3: crosses it
+            [1, 1], [3, 1],  # 4-5: parallel, 1 m away, not end to end
+            [0, 3], [4, 3],  # 6-7: parallel, 3 m away
+            [7, 0],  # 1-8: shares the cone (4, 0) and continues: consecutive
+            [1, -1.5], [1, -4.5],  # 9-10: its end 1.5 m from the fixed edge's middle
+            [5, 1], [7, 3],  # 11-12: 1.41 m away, but end to end ((4, 0)-(5, 1))
+            [10, 0], [14, 0], [12, -1], [12, 1],  # 13-14, 15-16: cross each other only
+            [1, -2.5], [3, -2.5],  # 17-18: exactly min_width away (closed limit: allowed)
+            [3, 0], [3.5, -2],  # 19-20: touches the fixed edge's interior
+            [1, 0.5],  # 0-21: shares the cone (0, 0) (0.45 m from the fixed edge): allowed
+        ],
+        float,
+    )
+    edges = np.array([[2, 3], [4, 5], [6, 7], [1, 8], [9, 10], [11, 12], [13, 14], [15, 16],
+                      [17, 18], [19, 20], [0, 21]])
+    expect = [True, True, False, False, True, False, False, False, False, True, False]
+    fixed = np.array([[0, 1]])
+    assert C.blocked_by_fixed(pts, edges, fixed, 2.5).tolist() == expect
+    # Orientation of the edges does not matter, nor does their order.
+    assert C.blocked_by_fixed(pts, edges[:, ::-1], fixed[:, ::-1], 2.5).tolist() == expect
+    perm = np.random.default_rng(0).permutation(len(edges))
+    assert C.blocked_by_fixed(pts, edges[perm], fixed, 2.5).tolist() == [expect[k] for k in perm]
+    # A narrower minimum width frees the parallel edge 1 m away and the 1.5 m approach.
+    narrow = C.blocked_by_fixed(pts, edges, fixed, 1.0)
+    assert narrow.tolist() == [True, False, False, False, False, False, False, False, False,
+                               True, False]
+    # A second fixed edge adds its own blocks: 15-16 crosses 13-14 (and not itself).
+    more = np.array([[0, 1], [15, 16]])
+    both = C.blocked_by_fixed(pts, edges, more, 2.5)
+    assert both.tolist() == [e or k == 6 for k, e in enumerate(expect)]
+    # Nothing fixed, or no candidates: nothing blocked.
+    assert C.blocked_by_fixed(pts, edges, np.zeros((0, 2), int), 2.5).tolist() == [False] * 11
+    assert C.blocked_by_fixed(pts, np.zeros((0, 2), int), fixed, 2.5).shape == (0,)
+
+
+@st.composite
+def points_and_edge_split(draw):
+    """6-9 distinct points on a 0.1 m grid in a 12 m box (so collinear, touching and exactly
+    min_width cases happen), their candidate edges split at random into candidates, fixed
+    and unused, each edge in a random orientation, the candidates in a random order."""
+    xy = draw(st.lists(st.tuples(st.integers(0, 120), st.integers(0, 120)), min_size=6,
+                       max_size=9, unique=True))
+    pts = np.ascontiguousarray(np.array(xy, dtype=np.float64) / 10.0)
+    edges = C.candidate_edges(pts, 5.5)
+    role = draw(st.lists(st.sampled_from([0, 1, 2]), min_size=len(edges), max_size=len(edges)))
+    flip = draw(st.lists(st.booleans(), min_size=len(edges), max_size=len(edges)))
+    oriented = np.array([e[::-1] if f else e for e, f in zip(edges.tolist(), flip, strict=True)],
+                        dtype=np.int64).reshape(-1, 2)
+    role = np.array(role, dtype=int)
+    cand, fixed = oriented[role == 1], oriented[role == 2]
+    cand = cand[draw(st.permutations(list(range(len(cand)))))] if len(cand) else cand
+    return pts, cand, fixed
+
+
+@settings(max_examples=60, deadline=None)
+@given(points_and_edge_split(), st.sampled_from([1.0, 2.5, 3.0]))
+def test_blocked_by_fixed_matches_brute_force(case, min_width):
+    pts, cand, fixed = case
+    brute = []
+    for e in cand:
+        blocked = False
+        for f in fixed:
+            if len({*e.tolist(), *f.tolist()}) < 4:
+                continue
+            a0, a1, b0, b1 = pts[min(e)], pts[max(e)], pts[min(f)], pts[max(f)]
+            d, end = geo.segment_distance_end(a0, a1, b0, b1)
+            if geo.segments_intersect(a0, a1, b0, b1) or (d < min_width and not end):
+                blocked = True
+        brute.append(blocked)
+    got = C.blocked_by_fixed(pts, cand, fixed, min_width)
+    assert got.dtype == bool and got.shape == (len(cand),)
+    assert got.tolist() == brute
+
+
+def _lane_edges(left, right):
+    return np.array([sorted(e) for side in (left, right)
+                     for e in zip(side[:-1].tolist(), side[1:].tolist(), strict=True)],
+                    dtype=np.int64).reshape(-1, 2)
+
+
+@pytest.mark.parametrize("sided", [False, True])
+def test_solve_with_fixed_lane_never_uses_a_blocked_edge(sided):
+    p = LaneParams()
+    checked = changed = 0
+    for seed, fp_rate, pose_k in ((100, 0.2, 30), (100, 0.0, 150), (3, 0.2, 80), (1, 0.2, 200)):
+        f = simulate_lap(generate_track(seed), range_m=50.0, fp_rate=fp_rate, seed=0).frame(
+            pose_k)
+        pts = np.ascontiguousarray(f.cones, dtype=np.float64)
+        free = RldModel(p, warm_start=False, sided=sided).solve(pts, f.pose, time_limit_s=5.0)
+        assert free.status == LaneStatus.OPTIMAL, (seed, pose_k)
+        lane_e = _lane_edges(free.left, free.right)
+        far = np.hypot(*(pts[lane_e].mean(axis=1) - f.pose.xy).T) > 2 * p.near_radius_m
+        # (1) The lane's own far edges fixed: they block nothing of the lane itself (shared
+        # cones, and the lane is wide enough), so the optimum stays.
+        own = _lane_edges(free.left[-2:], free.right[-2:])
+        assert np.all(far[np.isin(lane_e, own).all(axis=1)])
+        # (2) Candidate edges that pinch or cross the lane's far part, fixed: the solver
+        # must go around them (or find no lane).
+        cand = C.candidate_edges(pts, p.max_cone_spacing_m)
+        cand = cand[~np.isin(cand, np.r_[free.left, free.right]).any(axis=1)]
+        hits = np.array([C.blocked_by_fixed(pts, lane_e[far], [c], p.min_width_m).any()
+                         for c in cand], dtype=bool) if len(cand) else np.zeros(0, bool)
+        intruders = cand[hits][:2]
+        for fixed in (own, intruders):
+            if len(fixed) == 0:
+                continue
+            lane = RldModel(p, warm_start=False, sided=sided).solve(
+                pts, f.pose, time_limit_s=5.0, fixed_lane=fixed)
+            if fixed is own:
+                assert lane.status == LaneStatus.OPTIMAL
+                assert lane.cost == pytest.approx(free.cost, abs=1e-6)
+            if not lane.ok:
+                continue
+            used = _lane_edges(lane.left, lane.right)
+            assert not C.blocked_by_fixed(pts, used, fixed, p.min_width_m).any(), \
+                (seed, pose_k, fixed.tolist())
+            assert lane.stats["blocked_edges"] >= (1 if fixed is intruders else 0)
+            if fixed is intruders:  # they block an edge of the free lane: it cannot come back
+                assert not np.array_equal(used, lane_e)
+                changed += 1
+            checked += 1
+    assert checked >= 6 and changed >= 2
 
 
 # --- heading mask (eq. 9) and near-car mask (eq. 11) ------------------------------------------
