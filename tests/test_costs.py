@@ -51,7 +51,8 @@ def test_high_cost_masks_eq27_28():
 
 
 def test_lane_cost_hand_worked():
-    p = LaneParams(angle_tolerance_rad=1.0)  # d_e 3.5, d_t 2, theta_t 1, weights 1, benefit 2.5
+    # d_e 3.5, d_t 2, theta_t 1, weights 1, benefit 2.5 (pinned: the hand-worked numbers need them)
+    p = LaneParams(angle_tolerance_rad=1.0, spacing_tolerance_m=2.0)
     # Straight boundaries along the heading, cones 3.5 m apart: only the benefit counts.
     pts = np.array([[0, 2], [3.5, 2], [7, 2], [0, -2], [3.5, -2], [7, -2]], float)
     assert costs.lane_cost(pts, [0, 1, 2], [3, 4, 5], CAR, p) == pytest.approx(-4 * 2.5)
