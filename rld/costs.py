@@ -123,11 +123,13 @@ def lane_cost(
     colors: np.ndarray | None = None,
     confidence: np.ndarray | None = None,
     sided: bool = False,
+    heading: bool = True,
 ) -> float:
     """RLD's objective (eq. 29) of the lane graph made by two index sequences: the sum of the
     edge coefficients of its edges plus ``w_t`` times the angle cost at every interior cone,
     plus the colour and confidence costs when given (``sided`` adds the per-cone colour cost
-    of the side-aware formulation)."""
+    of the side-aware formulation). ``heading=False`` leaves out the heading cost, as the
+    incremental solver's frontier program does (``edge_objective``)."""
     total = 0.0
     for side, idx in enumerate((left, right)):
         idx = np.asarray(idx, dtype=np.int64)
@@ -140,7 +142,7 @@ def lane_cost(
             continue
         seq = np.concatenate([idx, idx[:1]]) if closed else idx
         edges = np.column_stack([seq[:-1], seq[1:]])
-        total += float(edge_objective(points, edges, pose, params, colors).sum())
+        total += float(edge_objective(points, edges, pose, params, colors, heading).sum())
         turns = geo.polyline_turn_angles(points[idx], closed=closed)
         total += params.w_angle * float(angle_cost(turns, params.angle_tolerance_rad).sum())
     return total

@@ -57,7 +57,14 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
-from rld.constraints import crossing_edge_pairs, lane_is_feasible, width_conflicts
+from rld import geometry as geo
+from rld.constraints import (
+    blocked_by_fixed,
+    crossing_edge_pairs,
+    lane_is_feasible,
+    width_conflicts,
+)
+from rld.costs import lane_cost
 from rld.solver import MATCH_TOLERANCE_M, RldModel
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
@@ -97,6 +104,8 @@ class IncrementalRld:
         self.frontier = RldModel(params, backend=backend)  # from the virtual pose
         self.restarts = 0
         self.rollbacks = 0
+        self.insertions = 0
+        self.prev_map: np.ndarray | None = None  # the last call's map, to tell new cones
         self.reset()
 
     def reset(self) -> None:
@@ -187,6 +196,70 @@ class IncrementalRld:
                                                     closed=True)
             return (newL, newR), attempt, closes
         return None, self.max_rollbacks + 1, False
+
+    def _insert_new_cones(self, points, L, R, prev_map) -> tuple[np.ndarray, np.ndarray, int]:
+        """Late insertion: a cone that entered the map since the last call and lies beside a
+        kept edge (a, b), between its ends and less than half the minimum width from it,
+        joins the lane as a -> c -> b when that lowers the RLD objective (the shared
+        ``lane_cost`` over the edges and turns it changes) and breaks no constraint (turn
+        limit, and the shared crossing and width families against the rest of the lane).
+        A cone the perception saw late (in a hairpin, say) is then not skipped for good
+        once the frontier has moved on. Returns (L, R, insertions)."""
+        if prev_map is None or prev_map.shape[0] == 0:
+            return L, R, 0
+        p = self.params
+        lane = np.union1d(L, R)
+        d, _ = cKDTree(prev_map).query(points, distance_upper_bound=MATCH_TOLERANCE_M)
+        new = np.setdiff1d(np.flatnonzero(~np.isfinite(d)), lane)
+        if new.size == 0:
+            return L, R, 0
+        sides = [L.copy(), R.copy()]
+        count = 0
+        for c in new:
+            best = None
+            for s_i, S in enumerate(sides):
+                seq = np.r_[S, S[:1]] if self.closed else S
+                a_xy, b_xy = points[seq[:-1]], points[seq[1:]]
+                ab = b_xy - a_xy
+                len2 = np.maximum((ab ** 2).sum(axis=1), 1e-12)
+                t = ((points[c] - a_xy) * ab).sum(axis=1) / len2
+                foot = a_xy + t[:, None] * ab
+                lat = np.hypot(*(points[c] - foot).T)
+                for i in np.flatnonzero((t > 0) & (t < 1) & (lat < p.min_width_m / 2)):
+                    delta = self._insertion_delta(points, sides, s_i, int(i), int(c))
+                    if delta is not None and (best is None or delta < best[0]):
+                        best = (delta, s_i, int(i))
+            if best is not None and best[0] < -1e-9:
+                _, s_i, i = best
+                sides[s_i] = np.insert(sides[s_i], i + 1, c)
+                count += 1
+        return sides[0], sides[1], count
+
+    def _insertion_delta(self, points, sides, s_i, i, c) -> float | None:
+        """The objective change of inserting cone ``c`` after position ``i`` of boundary
+        ``sides[s_i]``, or None when the insertion breaks a constraint."""
+        p = self.params
+        S = sides[s_i]
+        n = S.size
+        idx = [(i + k) % n if self.closed else i + k for k in (-1, 0, 1, 2)]
+        idx = [j for j in idx if 0 <= j < n] if not self.closed else idx
+        local = S[idx]
+        pos = int(np.flatnonzero(local == S[i])[0])
+        with_c = np.insert(local, pos + 1, c)
+        turns = geo.polyline_turn_angles(points[with_c])
+        if np.any(np.abs(turns) > p.max_turn_angle_rad):
+            return None
+        others = [np.column_stack([T[:-1], T[1:]]) for T in
+                  ((np.r_[X, X[:1]] if self.closed else X) for X in sides)]
+        rest = np.vstack(others)
+        a, b = int(S[i]), int(S[(i + 1) % n])
+        same = ((rest[:, 0] == a) & (rest[:, 1] == b)) | ((rest[:, 0] == b) & (rest[:, 1] == a))
+        rest = rest[~same]
+        if blocked_by_fixed(points, np.array([[a, c], [c, b]]), rest, p.min_width_m).any():
+            return None
+        pose = Pose(0.0, 0.0, 0.0)  # no heading term: the pose does not enter the cost
+        return lane_cost(points, with_c, [], pose, p, heading=False) - \
+            lane_cost(points, local, [], pose, p, heading=False)
 
     def _kept_edges(self, points, kl, kr, window) -> np.ndarray:
         """The kept lane's edges (both sides, up to the junctions) that come near the frontier
@@ -314,6 +387,7 @@ class IncrementalRld:
         stats: dict = {}
         if colors is not None or confidence is not None:
             stats["note"] = "the incremental solver ignores colors and confidence"
+        prev_map, self.prev_map = self.prev_map, np.array(points, dtype=np.float64)
         if self.left_xy is None:
             return self._start(points, pose, time_limit_s, stats)
         if self._jumped(pose):
@@ -325,7 +399,11 @@ class IncrementalRld:
             return self._start(points, pose, time_limit_s, stats,
                                "a lane cone moved or vanished")
         self.prev_pose, self.n_map = pose, points.shape[0]
-        L, R = matched
+        L, R, inserted = self._insert_new_cones(points, *matched, prev_map)
+        if inserted:
+            self.insertions += inserted
+            self.left_xy, self.right_xy = points[L], points[R]
+        stats["insertions"] = self.insertions
         if self.closed:
             return self._view(points, pose, L, R, LaneStatus.FEASIBLE, "closed", stats)
         self._last_frontier = {}

@@ -26,15 +26,16 @@ def drive(seed: int = 100, fp_rate: float = 0.0, range_m: float = 50.0, poses=No
         yield k, f, lane, model
 
 
-def test_kept_lane_never_changes_except_by_a_counted_rollback_or_restart():
+def test_kept_lane_never_changes_except_by_a_counted_rollback_restart_or_insertion():
     prev = None
     checked = 0
     for _, _, _lane, model in drive(100):
         if model.left_xy is None:
             prev = None
             continue
-        now = (model.left_xy.copy(), model.right_xy.copy(), model.restarts, model.rollbacks)
-        if prev is not None and now[2] == prev[2] and now[3] == prev[3]:
+        now = (model.left_xy.copy(), model.right_xy.copy(), model.restarts, model.rollbacks,
+               model.insertions)
+        if prev is not None and now[2:] == prev[2:]:
             for old, new in ((prev[0], now[0]), (prev[1], now[1])):
                 # Everything but the released frontier is kept, cone for cone.
                 keep = max(len(old) - model.frontier_cones, 0)
@@ -274,3 +275,25 @@ def test_fixing_the_optimal_lanes_own_start_keeps_the_optimum():
     fixed = RldModel(p, warm_start=False).solve(f.cones, f.pose, time_limit_s=5.0, start=start)
     assert fixed.status == LaneStatus.OPTIMAL
     assert fixed.cost == pytest.approx(free.cost, abs=1e-6)
+
+
+def test_a_cone_seen_late_beside_a_kept_edge_is_inserted():
+    # A straight lane, cones 2.5 m apart; the left cone at x = 5 is missing from the first map
+    # (seen late), so the kept lane bridges the 5 m gap. When it appears, it joins the lane
+    # between its neighbours (a counted insertion), and nothing else changes.
+    xs = np.arange(0.0, 40.0, 2.5)
+    left = np.column_stack([xs, np.full(xs.size, 2.0)])
+    right = np.column_stack([xs, np.full(xs.size, -2.0)])
+    late = int(np.flatnonzero(xs == 5.0)[0])
+    first = np.vstack([np.delete(left, late, axis=0), right])
+    pose = (-1.0, 0.0, 0.0)
+    solver = LaneSolver("rld-incremental")
+    lane = solver.solve(first, pose)
+    assert lane.ok and lane.stats["mode"] == "start"
+    assert not np.any(np.all(np.isclose(lane.left_xy, [5.0, 2.0]), axis=1))
+    second = np.vstack([first, left[late]])
+    lane = solver.solve(second, pose)
+    assert lane.ok and lane.stats["insertions"] == 1
+    xy = lane.left_xy
+    k = int(np.flatnonzero(np.all(np.isclose(xy, [5.0, 2.0]), axis=1))[0])
+    np.testing.assert_allclose(xy[k - 1:k + 2, 0], [2.5, 5.0, 7.5])
