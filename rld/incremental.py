@@ -7,6 +7,9 @@ re-optimises only its frontier:
 1. Match. Every kept lane cone is looked up in the new map (nearest cone within 0.5 m). A pose
    jump (more than 5 m or 45 degrees since the last call), a map with fewer cones than before,
    or a kept cone with no map cone within 0.5 m (it moved or vanished) restarts from scratch.
+   Late insertion: a cone new in the map that lies beside a kept edge (a, b), between its
+   ends and under half the minimum width from it, joins the lane as a -> c -> b when that
+   lowers the shared RLD objective and breaks no constraint (counted in ``insertions``).
 2. Frontier. The last ``frontier_cones`` cones of each boundary are released; the cone before
    them (the anchor) and the one before that (its predecessor) stay. The frontier program is
    the ordinary RLD program (``rld.program`` through ``rld.solver.RldModel``, the shared
@@ -35,14 +38,15 @@ re-optimises only its frontier:
 
 The returned ``Lane`` starts at the boundary cone nearest the car on each side (the next one
 when that one is behind the car, the protocol's convention for the truth) and runs forward to
-the end of the lane (around the loop when closed). ``lane.stats`` counts ``restarts`` and
-``rollbacks`` (over the solver's life), says ``mode`` (``start``, ``extend``, ``closed``),
-``restart_reason``, ``lane_cones`` and the frontier program's ``n_cones_used``.
+the end of the lane (around the loop when closed). ``lane.stats`` counts ``restarts``,
+``rollbacks`` and ``insertions`` (over the solver's life), says ``mode`` (``start``,
+``extend``, ``closed``), ``restart_reason``, ``lane_cones`` and the frontier program's
+``n_cones_used``.
 
-Guarantees: between two calls without a counted rollback or restart, the kept lane (everything
-but the released frontier) is unchanged, cone for cone; each frontier satisfies every RLD
-constraint among its own cones, at the junction, and the width and crossing families against
-the kept lane's edges near it. The frontier program never holds more than
+Guarantees: between two calls without a counted rollback, restart or insertion, the kept lane
+(everything but the released frontier) is unchanged, cone for cone; each frontier satisfies
+every RLD constraint among its own cones, at the junction, and the width and crossing families
+against the kept lane's edges near it. The frontier program never holds more than
 ``frontier_max_cones`` cones, whatever the lane's length. Not guaranteed: optimality of the
 whole lane (each frontier is optimal given the kept part), and correction of a wrong cone once
 it is kept: it stays until a restart or until the car has passed it.
