@@ -409,6 +409,7 @@ class IncrementalRld:
             self.left_xy, self.right_xy = points[L], points[R]
         stats["insertions"] = self.insertions
         if self.closed:
+            stats["n_cones_used"] = 0  # the loop is frozen: no program runs
             return self._view(points, pose, L, R, LaneStatus.FEASIBLE, "closed", stats)
         self._last_frontier = {}
         new, attempts, closes = self._extend(points, L, R, time_limit_s)

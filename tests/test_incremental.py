@@ -61,6 +61,7 @@ def test_clean_closed_track_ends_as_the_whole_loop():
         assert np.array_equal(src, rolled) or np.array_equal(src, np.roll(rolled[::-1], 1))
     sc = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
     assert sc.category in ("gt", "near_gt")
+    assert lane.stats["mode"] == "closed" and lane.stats["n_cones_used"] == 0  # frozen
 
 
 def test_a_pose_jump_restarts():
