@@ -82,6 +82,14 @@ class _RldIncrementalMethod:
     backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy")
     rankers = False
 
+    @staticmethod
+    def max_every() -> float:
+        """The pose stride (poses lie 1 m apart) from which every call is a pose jump that
+        restarts it: the evaluation must drive it below this."""
+        from rld.incremental import POSE_JUMP_M
+
+        return POSE_JUMP_M
+
     def __init__(self, params: LaneParams, backend: str | None = None, ranker=None,
                  **options) -> None:
         from rld.incremental import IncrementalRld

@@ -84,6 +84,13 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / max(float(np.hypot(v[0], v[1])), 1e-9)
 
 
+def _edges(seq: np.ndarray, closed: bool = False) -> np.ndarray:
+    """The (k, 2) edges of a boundary, an index sequence; with the closing edge when
+    ``closed``."""
+    seq = np.r_[seq, seq[:1]] if closed and seq.size else seq
+    return np.column_stack([seq[:-1], seq[1:]])
+
+
 class IncrementalRld:
     """RLD that keeps its lane between calls and re-optimises only the frontier (module
     docstring). ``backend``: as ``RldModel``; ``frontier_cones``: cones per side released and
@@ -220,17 +227,17 @@ class IncrementalRld:
         sides = [L.copy(), R.copy()]
         count = 0
         for c in new:
+            lane_edges = np.vstack([_edges(S, self.closed) for S in sides])
             best = None
             for s_i, S in enumerate(sides):
-                seq = np.r_[S, S[:1]] if self.closed else S
-                a_xy, b_xy = points[seq[:-1]], points[seq[1:]]
+                e = _edges(S, self.closed)
+                a_xy, b_xy = points[e[:, 0]], points[e[:, 1]]
                 ab = b_xy - a_xy
-                len2 = np.maximum((ab ** 2).sum(axis=1), 1e-12)
-                t = ((points[c] - a_xy) * ab).sum(axis=1) / len2
-                foot = a_xy + t[:, None] * ab
-                lat = np.hypot(*(points[c] - foot).T)
+                t = ((points[c] - a_xy) * ab).sum(axis=1) / np.maximum((ab ** 2).sum(axis=1),
+                                                                       1e-12)
+                lat = geo.point_segment_distance(points[c], a_xy, b_xy)
                 for i in np.flatnonzero((t > 0) & (t < 1) & (lat < p.min_width_m / 2)):
-                    delta = self._insertion_delta(points, sides, s_i, int(i), int(c))
+                    delta = self._insertion_delta(points, S, int(i), int(c), lane_edges)
                     if delta is not None and (best is None or delta < best[0]):
                         best = (delta, s_i, int(i))
             if best is not None and best[0] < -1e-9:
@@ -239,11 +246,10 @@ class IncrementalRld:
                 count += 1
         return sides[0], sides[1], count
 
-    def _insertion_delta(self, points, sides, s_i, i, c) -> float | None:
-        """The objective change of inserting cone ``c`` after position ``i`` of boundary
-        ``sides[s_i]``, or None when the insertion breaks a constraint."""
+    def _insertion_delta(self, points, S, i, c, lane_edges) -> float | None:
+        """The objective change of inserting cone ``c`` after position ``i`` of boundary ``S``,
+        or None when the insertion breaks a constraint; ``lane_edges``: the whole lane's."""
         p = self.params
-        S = sides[s_i]
         n = S.size
         idx = [(i + k) % n if self.closed else i + k for k in (-1, 0, 1, 2)]
         idx = [j for j in idx if 0 <= j < n] if not self.closed else idx
@@ -253,13 +259,10 @@ class IncrementalRld:
         turns = geo.polyline_turn_angles(points[with_c])
         if np.any(np.abs(turns) > p.max_turn_angle_rad):
             return None
-        others = [np.column_stack([T[:-1], T[1:]]) for T in
-                  ((np.r_[X, X[:1]] if self.closed else X) for X in sides)]
-        rest = np.vstack(others)
         a, b = int(S[i]), int(S[(i + 1) % n])
-        same = ((rest[:, 0] == a) & (rest[:, 1] == b)) | ((rest[:, 0] == b) & (rest[:, 1] == a))
-        rest = rest[~same]
-        if blocked_by_fixed(points, np.array([[a, c], [c, b]]), rest, p.min_width_m).any():
+        same = np.all(np.sort(lane_edges, axis=1) == sorted((a, b)), axis=1)
+        if blocked_by_fixed(points, np.array([[a, c], [c, b]]), lane_edges[~same],
+                            p.min_width_m).any():
             return None
         pose = Pose(0.0, 0.0, 0.0)  # no heading term: the pose does not enter the cost
         return lane_cost(points, with_c, [], pose, p, heading=False) - \
@@ -268,7 +271,7 @@ class IncrementalRld:
     def _kept_edges(self, points, kl, kr, window) -> np.ndarray:
         """The kept lane's edges (both sides, up to the junctions) that come near the frontier
         window: the frontier may not cross them or pinch the lane against them."""
-        e = np.vstack([np.column_stack([kl[:-1], kl[1:]]), np.column_stack([kr[:-1], kr[1:]])])
+        e = np.vstack([_edges(kl), _edges(kr)])
         if e.shape[0] == 0:
             return e
         lo, hi = points[window].min(axis=0), points[window].max(axis=0)
@@ -285,8 +288,7 @@ class IncrementalRld:
         which the frontier program itself applies only among its own cones."""
         edges, new = [], []
         for side, f0, closes in ((L, fl0, ends[0]), (R, fr0, ends[1])):
-            seq = np.r_[side, side[:1]] if closes else side
-            e = np.column_stack([seq[:-1], seq[1:]])
+            e = _edges(side, closes)
             edges.append(e)
             new.append(np.arange(e.shape[0]) >= f0)
         edges, new = np.vstack(edges), np.concatenate(new)

@@ -266,9 +266,7 @@ def build_program(
     if confidence is not None:
         cone_cost += p.w_confidence * costs.confidence_cost(confidence)
     h = np.flatnonzero(cons.heading_mask(points, edges, pose, p.heading_radius_m,
-                                         p.heading_tolerance_rad))
-    if not heading:
-        h = None
+                                         p.heading_tolerance_rad)) if heading else None
     wc = cons.width_conflicts(points, edges, p.min_width_m)
     cr = cons.crossing_edge_pairs(points, edges) if no_crossing else np.zeros((0, 2), int)
     # Far cone pairs that may not both be far endpoints (eqs 12-17).

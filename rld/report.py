@@ -88,16 +88,19 @@ def evaluate(tracks: Sequence[Track], specs: Sequence[MethodSpec], ranges=(30.0,
              processes: int | None = None, progress: bool = True,
              plot_failures: str | None = None) -> list[PoseRecord]:
     """Every (spec, track, range, rate) of the protocol; ``processes`` workers (default: the
-    CPU count). Records come back in a fixed order whatever the scheduling. ``rld-incremental``
-    keeps its lane from call to call, as on the car: it needs ``every`` below 5 (poses lie 1 m
-    apart; a larger stride is a pose jump, which restarts it at every call)."""
+    CPU count). Records come back in a fixed order whatever the scheduling. A method that
+    keeps its lane from call to call (``rld-incremental``) says how small ``every`` must be
+    (its ``max_every``: 5, poses lie 1 m apart and a larger stride is a pose jump, which
+    restarts it at every call)."""
     from tqdm import tqdm
 
-    from rld.incremental import POSE_JUMP_M
+    from rld.api import METHODS
 
-    if every >= POSE_JUMP_M and any(s.method == "rld-incremental" for s in specs):
-        raise ValueError(f"rld-incremental is driven pose by pose: use every < {POSE_JUMP_M:g} "
-                         f"(got {every}); a larger stride restarts it at every call")
+    for s in specs:
+        limit = getattr(METHODS[s.method], "max_every", None)
+        if limit is not None and every >= limit():
+            raise ValueError(f"{s.method} is driven pose by pose: use every < {limit():g} "
+                             f"(got {every}); a larger stride restarts it at every call")
 
     jobs = [(s, t, r, fp) for s in specs for r in ranges for fp in fp_rates for t in tracks]
     n = processes or os.cpu_count() or 1

@@ -64,12 +64,19 @@ def test_clean_closed_track_ends_as_the_whole_loop():
     assert lane.stats["mode"] == "closed" and lane.stats["n_cones_used"] == 0  # frozen
 
 
-def test_a_pose_jump_restarts():
+def driven(poses):
+    """A solver driven over ``poses`` of the clean lap of generated track 100: (lap, solver,
+    last frame, last lane)."""
     lap = simulate_lap(generate_track(100), range_m=50.0, fp_rate=0.0, seed=0)
     solver = LaneSolver("rld-incremental")
-    for k in range(20, 30):
+    for k in poses:
         f = lap.frame(k)
         lane = solver.solve(f.cones, f.pose)
+    return lap, solver, f, lane
+
+
+def test_a_pose_jump_restarts():
+    lap, solver, _, lane = driven(range(20, 30))
     assert lane.stats["restarts"] == 0 and lane.stats["mode"] == "extend"
     f = lap.frame(60)  # 30 m further on: a jump
     lane = solver.solve(f.cones, f.pose)
@@ -78,11 +85,7 @@ def test_a_pose_jump_restarts():
 
 
 def test_a_moved_cone_restarts():
-    lap = simulate_lap(generate_track(100), range_m=50.0, fp_rate=0.0, seed=0)
-    solver = LaneSolver("rld-incremental")
-    for k in range(20, 26):
-        f = lap.frame(k)
-        lane = solver.solve(f.cones, f.pose)
+    _, solver, f, lane = driven(range(20, 26))
     cones = f.cones.copy()
     cones[lane.left[0]] += [0.8, 0.0]  # a lane cone moved by more than 0.5 m
     lane = solver.solve(cones, f.pose)
@@ -211,12 +214,8 @@ def test_valid_options_are_kept():
 
 
 def test_a_map_that_loses_cones_restarts():
-    lap = simulate_lap(generate_track(100), range_m=50.0, fp_rate=0.0, seed=0)
-    solver = LaneSolver("rld-incremental")
+    lap, solver, f, lane = driven(range(20, 26))
     model = solver._impl.model
-    for k in range(20, 26):
-        f = lap.frame(k)
-        lane = solver.solve(f.cones, f.pose)
     assert lane.stats["mode"] == "extend" and lane.stats["restarts"] == 0
     # Drop the map cone farthest from every kept lane cone: no lane cone is lost, only the
     # count shows that the map shrank.
