@@ -38,6 +38,7 @@ __all__ = [
     "c_seg",
     "c_poly",
     "lane_widths",
+    "overlap_widths",
     "c_width",
     "lane_is_feasible",
     "find_starting_vertices",
@@ -255,6 +256,37 @@ def lane_widths(left: np.ndarray, right: np.ndarray, closed: bool = False) -> np
                 t0 = t1 = T[None, :, :]
             out.append(geo.segment_distance(q0, q1, t0, t1).min(axis=1))
     return np.concatenate(out)
+
+
+def overlap_widths(left: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """Distance from every cone of each boundary to the other boundary (metres), for the cones
+    whose nearest point on the other boundary lies inside it, not at one of its two ends.
+
+    The width check of a finished lane in RLD's quality checks (section IV-B: "the distance
+    between boundaries falling within the minimum and maximum width"). It differs from CLC's
+    ``lane_widths`` only at the lane's ends: where one boundary runs on past the other's last
+    cone, ``lane_widths`` measures the diagonal to that last cone (up to 7.4 m on a 4 m lane in
+    a bend), which the true lane fails too; here those cones are not paired. Left cones first,
+    then right. A boundary of fewer than two cones pairs nothing.
+    """
+    out = []
+    for Q, T in ((left, right), (right, left)):
+        Q = np.asarray(Q, dtype=np.float64).reshape(-1, 2)
+        T = np.asarray(T, dtype=np.float64).reshape(-1, 2)
+        if T.shape[0] < 2 or Q.shape[0] == 0:
+            continue
+        a, ab = T[:-1], T[1:] - T[:-1]
+        den = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-18)
+        raw = np.einsum("qij,ij->qi", Q[:, None, :] - a[None], ab) / den
+        foot = a[None] + np.clip(raw, 0.0, 1.0)[..., None] * ab[None]
+        d = np.hypot(*(Q[:, None, :] - foot).transpose(2, 0, 1))
+        k = np.argmin(d, axis=1)
+        tk = raw[np.arange(Q.shape[0]), k]
+        # Beyond an end: the foot before the first cone or past the last (a cone abreast of
+        # an end cone, t = 0 or 1 exactly, is paired).
+        at_end = ((k == 0) & (tk < -1e-12)) | ((k == T.shape[0] - 2) & (tk > 1.0 + 1e-12))
+        out.append(d[np.arange(Q.shape[0]), k][~at_end])
+    return np.concatenate(out) if out else np.zeros(0)
 
 
 def c_width(

@@ -49,6 +49,12 @@ def test_bench_incremental_quick(dataset_dir):
     assert "| 0% | all |" in result.output and "lane cones" in result.output
 
 
+def test_bench_rld_paper_quick():
+    result = CliRunner().invoke(main, ["bench", "rld-paper", "--poses", "3"])
+    assert result.exit_code == 0, result.output
+    assert "| all | 1:1 | 9 |" in result.output and "tolerant (%)" in result.output
+
+
 def test_eval_refuses_a_stride_that_restarts_the_incremental_solver():
     result = CliRunner().invoke(main, ["eval", "--generated", "1", "--methods",
                                        "rld-incremental", "--every", "5"])

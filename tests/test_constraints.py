@@ -351,6 +351,37 @@ def test_lane_widths_against_shapely(seed, nl, nr):
     assert w.max() == pytest.approx(far, abs=1e-9)
 
 
+def test_overlap_widths_hand_worked():
+    # A 4 m lane whose right boundary runs 8 m past the left one: the two right cones beyond
+    # the left's last cone are not paired (lane_widths measures sqrt(8^2 + 4^2) from the last
+    # to the left's last cone); the cones abreast of an end cone are.
+    L = np.array([[0, 2], [4, 2], [8, 2]], float)
+    R = np.array([[0, -2], [4, -2], [8, -2], [12, -2], [16, -2]], float)
+    np.testing.assert_allclose(C.overlap_widths(L, R), [4] * 6)
+    assert C.lane_widths(L, R).max() == pytest.approx(math.hypot(8, 4))
+    # Shifted 1 m: (9, 2) lies past the right's last cone, (0, -2) before the left's first.
+    L2 = np.array([[1, 2], [5, 2], [9, 2]], float)
+    np.testing.assert_allclose(C.overlap_widths(L2, R[:3]), [4, 4, 4, 4])
+    assert C.overlap_widths(L[:1], R).size == 1  # one cone pairs, its boundary pairs nothing
+    assert C.overlap_widths(np.zeros((0, 2)), R).size == 0
+
+
+@settings(max_examples=60)
+@given(st.integers(0, 10_000), st.integers(1, 6), st.integers(2, 6))
+def test_overlap_widths_against_shapely(seed, nl, nr):
+    rng = np.random.default_rng(seed)
+    L = np.cumsum(rng.uniform(0.5, 3, size=(nl, 2)), axis=0)
+    R = np.cumsum(rng.uniform(0.5, 3, size=(nr, 2)), axis=0) + [0, 4]
+
+    def paired(Q, T):
+        line = LineString(T)
+        return [line.distance(Point(p)) for p in Q
+                if 1e-9 < line.project(Point(p)) < line.length - 1e-9]
+
+    expect = paired(L, R) + (paired(R, L) if nl >= 2 else [])
+    np.testing.assert_allclose(np.sort(C.overlap_widths(L, R)), np.sort(expect), atol=1e-9)
+
+
 def test_lane_is_feasible_checks_every_constraint():
     p = LaneParams()
     left = np.array([[0, 2], [4, 2], [8, 2]], float)

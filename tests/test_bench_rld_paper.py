@@ -1,0 +1,58 @@
+"""The quality checks of the RLD paper's experiment (benchmarks/bench_rld_paper.py): the true
+lane passes them on every pose, and each check catches what it is for."""
+
+import numpy as np
+import pytest
+
+from benchmarks import bench_rld_paper as B
+from rld.types import LaneParams
+
+PARAMS = LaneParams(max_cones=12)
+
+
+@pytest.fixture(scope="module")
+def all_frames():
+    return list(B.frames(seed=0, poses=20, params=PARAMS))
+
+
+def test_true_lane_passes_every_check(all_frames):
+    assert len(all_frames) == 3 * 2 * 20
+    for f in all_frames:
+        left, right = f.truth
+        assert left.size >= 2 and right.size >= 2, (f.topology, f.ratio)
+        assert B.quality_failures(f, left, right, PARAMS) == [], (f.topology, f.ratio)
+
+
+def test_each_check_fails_what_it_is_for(all_frames):
+    f = next(f for f in all_frames if f.topology == "straight" and f.ratio == "1:1")
+    left, right = f.truth
+    fps = sorted(set(range(f.points.shape[0])) - f.expected - f.behind - f.on_line)
+    # One cone off the expected set is allowed, two are not.
+    assert B.quality_failures(f, np.r_[left, fps[:1]], right, PARAMS) == []
+    assert "set" in B.quality_failures(f, np.r_[left, fps[:1]], np.r_[right, fps[1:2]],
+                                       PARAMS)
+    assert "set" in B.quality_failures(f, left[:-1], right[:-1], PARAMS)
+    # Sides swapped; a boundary crossing the other; the 4 m straight against narrower and
+    # wider limits.
+    assert "side" in B.quality_failures(f, right, left, PARAMS)
+    assert "crossing" in B.quality_failures(f, left, right[::-1], PARAMS)
+    for lo, hi in ((4.5, 6.5), (2.5, 3.5)):
+        narrow = LaneParams(max_cones=12, min_width_m=lo, max_width_m=hi)
+        assert B.quality_failures(f, left, right, narrow) == ["width"]
+    assert B.quality_failures(f, [], right, PARAMS) == ["no lane"]
+
+
+def test_behind_and_on_line_cones_are_neutral(all_frames):
+    f = next(f for f in all_frames if f.behind)
+    left, right = f.truth
+    behind = np.array(sorted(f.behind))
+    on_left = f.pose.to_local(f.points[behind])[:, 1] > 0
+    lane = np.r_[behind[on_left], left], np.r_[behind[~on_left], right]
+    assert B.quality_failures(f, *lane, PARAMS) == []
+    g = next((g for g in all_frames if len(g.on_line) >= 2), None)
+    if g is None:
+        pytest.skip("no frame with two false positives on a boundary line")
+    on = sorted(g.on_line)[:2]
+    gl, gr = g.truth
+    assert "set" in B.quality_failures(g, np.r_[gl, on], gr, PARAMS)
+    assert "set" not in B.quality_failures(g, np.r_[gl, on], gr, PARAMS, tolerant=True)
