@@ -167,7 +167,7 @@ def enumerate_candidates(
         points, g.indptr, g.indices, int(start[0]), int(start[1]),
         float(np.cos(pose.yaw)), float(np.sin(pose.yaw)), float(params.max_turn_angle_rad),
         float(params.min_width_m), float(params.max_width_m), float(params.nvd_distance_weight),
-        int(it_max), np.ascontiguousarray(gl, dtype=np.int64),
+        float(params.nvd_lookahead_weight), int(it_max), np.ascontiguousarray(gl, dtype=np.int64),
         np.ascontiguousarray(gr, dtype=np.int64))
     cands = CandidateList(lf, lp, rf, rp)
     features = feats

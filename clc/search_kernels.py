@@ -30,8 +30,9 @@ failures (7.1 -> 15.7 % at 0 % false positives, 20.7 -> 29.3 % at 30 %) and comp
 searches instead of 1 %, so it is not used.
 
 Next-vertex decider, deviation: |turn| + ``dist_weight`` * distance instead of the turn alone
-(eq. 3); see ``LaneParams.nvd_distance_weight``. No memoization (eq. 3's cache): the decider
-scans the few neighbours of one cone, cheaper than a cache lookup here.
+(eq. 3), plus ``lookahead`` times the best such score of the step after the option; see
+``LaneParams.nvd_distance_weight`` and ``nvd_lookahead_weight``. No memoization (eq. 3's
+cache): the decider scans the few neighbours of one cone, cheaper than a cache lookup here.
 """
 
 from __future__ import annotations
@@ -76,12 +77,34 @@ def _option_turn(pts, path, n, v, hx, hy):
 
 
 @njit(cache=True)
+def _onward(pts, adj_ptr, adj_idx, c, v, in_path, max_turn, dist_weight, dead_end):
+    """The look-ahead of the next-vertex decider: the best score |turn| + dist_weight *
+    distance of a step from ``v`` onward (after c -> v) to a cone in no path and within the
+    turn limit; ``dead_end`` when there is none."""
+    best = np.inf
+    for s in range(adj_ptr[v], adj_ptr[v + 1]):
+        w = adj_idx[s]
+        if w == c or in_path[w]:
+            continue
+        t = abs(turn_angle(pts[c, 0], pts[c, 1], pts[v, 0], pts[v, 1], pts[w, 0], pts[w, 1]))
+        if t > max_turn:
+            continue
+        sc = t + dist_weight * math.hypot(pts[w, 0] - pts[v, 0], pts[w, 1] - pts[v, 1])
+        if sc < best:
+            best = sc
+    return dead_end if best == np.inf else best
+
+
+@njit(cache=True)
 def _choose_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx, hy,
-                   dist_weight, guide, guided):
+                   dist_weight, lookahead, dead_end, guide, guided):
     """The next-vertex decider (CLC eq. 3, with a distance term): among the neighbours of the
     path's end that are untried at this frame, in no path and within the turn limit (C_seg),
-    the one minimising |turn| + dist_weight * distance. The warm-start guide's next vertex wins
-    when the path is still a prefix of the guide. Returns (slot, vertex) or (-1, -1)."""
+    the one minimising |turn| + dist_weight * distance, plus ``lookahead`` times the best such
+    score of the step after it (``_onward``, ``dead_end`` when there is no step after it; 0:
+    none, the one-step decider). The warm-start
+    guide's next vertex wins when the path is still a prefix of the guide. Returns (slot,
+    vertex) or (-1, -1)."""
     c = path[n - 1]
     s0 = adj_ptr[c]
     best = -1
@@ -107,6 +130,9 @@ def _choose_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx,
         if v == want:
             return k, v
         score = a + dist_weight * math.hypot(pts[v, 0] - pts[c, 0], pts[v, 1] - pts[c, 1])
+        if lookahead > 0.0:
+            score += lookahead * _onward(pts, adj_ptr, adj_idx, c, v, in_path, max_turn,
+                                         dist_weight, dead_end)
         if score < best_score:
             best_score = score
             best = k
@@ -498,12 +524,14 @@ def _grow_rows(a, need):
 
 @njit(cache=True)
 def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, wmin, wmax,
-                    dist_weight, max_iterations, guide_l, guide_r):
+                    dist_weight, lookahead, max_iterations, guide_l, guide_r):
     """CLC Alg. 2: enumerate the path pairs from (start_l, start_r) that satisfy CD (eq. 6).
 
     ``pts`` (N, 2) float64 metres; ``adj_ptr`` (N+1,), ``adj_idx`` the search graph in CSR form
     (neighbours sorted by index); ``hx, hy`` the car's unit heading; ``max_turn`` phi_max (rad);
     ``wmin``, ``wmax`` the width bounds (m); ``dist_weight`` the NVD distance term (rad/m);
+    ``lookahead`` the weight of the NVD's look-ahead step (0: none; a cone with no step
+    onward scores as the worst step the graph holds, phi_max + dist_weight * longest edge);
     ``max_iterations`` it_max (<= 0: no limit); ``guide_l``, ``guide_r`` the warm-start paths
     (may be empty) the search follows first.
 
@@ -514,6 +542,14 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     options before the limit.
     """
     N = pts.shape[0]
+    longest = 0.0
+    for v in range(N):
+        for s in range(adj_ptr[v], adj_ptr[v + 1]):
+            w = adj_idx[s]
+            d = math.hypot(pts[w, 0] - pts[v, 0], pts[w, 1] - pts[v, 1])
+            if d > longest:
+                longest = d
+    dead_end = max_turn + dist_weight * longest
     maxdeg = 1
     for v in range(N):
         d = adj_ptr[v + 1] - adj_ptr[v]
@@ -586,9 +622,11 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
             break
         f = depth
         kl, vl = _choose_option(pts, adj_ptr, adj_idx, L, nL, triedL[f], in_path, max_turn,
-                                hx, hy, dist_weight, guide_l, on_gl[nL - 1])
+                                hx, hy, dist_weight, lookahead, dead_end, guide_l,
+                                on_gl[nL - 1])
         kr, vr = _choose_option(pts, adj_ptr, adj_idx, R, nR, triedR[f], in_path, max_turn,
-                                hx, hy, dist_weight, guide_r, on_gr[nR - 1])
+                                hx, hy, dist_weight, lookahead, dead_end, guide_r,
+                                on_gr[nR - 1])
         if kl < 0 and kr < 0:
             # Frame exhausted: undo the extension that made it.
             if depth == 0:

@@ -17,6 +17,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from clc import search_kernels as sk
 from clc.search import closable, enumerate_candidates, search_graph
 from rld import LaneParams, LaneSolver, LaneStatus, Pose, solve_lane
 from rld.constraints import c_seg, find_starting_vertices, lane_is_feasible
@@ -98,9 +99,11 @@ def test_enumeration_is_complete_and_sound(seed, n):
 
 @settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 2**31 - 1), n=st.integers(5, 9),
-       turn=st.floats(0.6, math.pi / 2), wmin=st.floats(1.5, 3.0), wmax=st.floats(4.0, 7.0))
-def test_enumeration_is_complete_under_other_limits(seed, n, turn, wmin, wmax):
-    params = LaneParams(max_turn_angle_rad=turn, min_width_m=wmin, max_width_m=wmax)
+       turn=st.floats(0.6, math.pi / 2), wmin=st.floats(1.5, 3.0), wmax=st.floats(4.0, 7.0),
+       lookahead=st.sampled_from([0.0, 0.75, 3.0]))
+def test_enumeration_is_complete_under_other_limits(seed, n, turn, wmin, wmax, lookahead):
+    params = LaneParams(max_turn_angle_rad=turn, min_width_m=wmin, max_width_m=wmax,
+                        nvd_lookahead_weight=lookahead)
     pts = lane_instance(seed, n)
     start = find_starting_vertices(pts, POSE, params.near_radius_m)
     if start is None:
@@ -123,6 +126,38 @@ def test_guide_orders_the_search_but_changes_no_candidate(seed, n):
     firsts = [(tuple(a.tolist()), tuple(b.tolist())) for a, b, _ in guided.candidates]
     # Following the guide, the search reaches the guide lane before it backtracks.
     assert firsts.index((tuple(left.tolist()), tuple(right.tolist()))) <= left.size + right.size
+
+
+def test_next_vertex_decider_looks_one_step_ahead():
+    # Track 3 of the shared dataset, pose 24 (car frame, metres): the boundary runs
+    # a -> b -> on -> after; "off" is an unlabelled cone 1.3 m outside the line.
+    a, b, on, off, after = (11.48, 1.07), (14.54, 2.95), (16.36, 5.09), (16.78, 3.53), \
+        (17.76, 7.77)
+    pts = np.array([a, b, on, off, after], dtype=np.float64)
+    g = search_graph(pts, PARAMS)
+    path = np.array([0, 1, -1, -1, -1], dtype=np.int64)
+    in_path = np.array([True, True, False, False, False])
+    tried = np.zeros(g.indptr[2] - g.indptr[1], dtype=bool)
+    none = np.zeros(0, dtype=np.int64)
+
+    def choose(lookahead):
+        return sk._choose_option(pts, g.indptr, g.indices, path, 2, tried, in_path,
+                                 PARAMS.max_turn_angle_rad, 1.0, 0.0, 0.15, lookahead, 9.0,
+                                 none, False)[1]
+
+    # By hand: |turn| + 0.15 d is 0.311 + 0.421 = 0.73 to "on" and 0.301 + 0.347 = 0.65 to
+    # "off"; the step after "on" (to "after", 12.8 deg, 3.03 m) scores 0.68, the best after
+    # "off" (to "after", 62.5 deg, 4.35 m; back to "on" turns 90.5 deg, past phi_max) 1.74.
+    assert choose(0.0) == 3
+    assert choose(0.75) == 2
+    phi = PARAMS.max_turn_angle_rad
+    assert sk._onward(pts, g.indptr, g.indices, 1, 2, in_path, phi, 0.15, 9.0) == \
+        pytest.approx(math.radians(12.8) + 0.15 * 3.03, abs=0.01)
+    assert sk._onward(pts, g.indptr, g.indices, 1, 3, in_path, phi, 0.15, 9.0) == \
+        pytest.approx(math.radians(62.5) + 0.15 * 4.35, abs=0.01)
+    # A cone with no step onward scores dead_end.
+    used = in_path | np.array([0, 0, 1, 1, 0], dtype=bool)
+    assert sk._onward(pts, g.indptr, g.indices, 2, 4, used, phi, 0.15, 9.0) == 9.0
 
 
 def test_candidates_satisfy_the_shared_predicate_under_the_limit():
