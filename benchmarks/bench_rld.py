@@ -77,6 +77,56 @@ def run(sizes=SIZES, backends=BACKENDS, n_tracks: int = 4, stride: int = 25,
     return rows
 
 
+def run_budget(sizes=(30, 40), budgets=(0.02, 0.05, 0.2), backends=BACKENDS,
+               n_tracks: int = 4, stride: int = 25, progress: bool = True) -> list[dict]:
+    """How far past its time budget a call runs: per (backend, n, budget), the call's time
+    minus the budget minus the model update (``lane.stats["build_time_s"]``), in ms; what
+    issue 3 bounds (the budget plus the model update). Cold calls, the instances of ``run``."""
+    from tqdm import tqdm
+
+    frames = [lap.frame(k) for lap, k in _frames(n_tracks, stride)]
+    rows = []
+    bar = tqdm(total=len(sizes) * len(budgets) * len(backends) * len(frames),
+               desc="rld budget", disable=not progress)
+    for backend in backends:
+        for n in sizes:
+            params = LaneParams(max_cones=n)
+            LaneSolver("rld", params, backend).solve(frames[0].cones, frames[0].pose)
+            for budget in budgets:
+                over, statuses = [], []
+                for f in frames:
+                    solver = LaneSolver("rld", params, backend)
+                    t0 = time.perf_counter()
+                    lane = solver.solve(f.cones, f.pose, time_limit_s=budget)
+                    dt = time.perf_counter() - t0
+                    over.append(dt - budget - lane.stats.get("build_time_s", 0.0))
+                    statuses.append(lane.status.name)
+                    bar.update(1)
+                ms = 1000 * np.array(over)
+                rows.append({"backend": backend, "n": n, "budget_s": budget, "calls": len(ms),
+                             "median_ms": float(np.median(ms)),
+                             "p95_ms": float(np.percentile(ms, 95)), "max_ms": float(ms.max()),
+                             "optimal": statuses.count("OPTIMAL"),
+                             "feasible": statuses.count("FEASIBLE"),
+                             "no_lane": len(statuses) - statuses.count("OPTIMAL")
+                             - statuses.count("FEASIBLE")})
+    bar.close()
+    return rows
+
+
+def budget_markdown(rows: list[dict]) -> str:
+    lines = ["Time past the budget, excluding the model update (negative: finished early).",
+             "",
+             "| backend | n | budget (ms) | calls | median (ms) | p95 (ms) | max (ms) | optimal | "
+             "feasible | no lane |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['backend']} | {r['n']} | {1000 * r['budget_s']:g} | {r['calls']} | "
+                     f"{r['median_ms']:.1f} | {r['p95_ms']:.1f} | {r['max_ms']:.1f} | "
+                     f"{r['optimal']} | {r['feasible']} | {r['no_lane']} |")
+    return "\n".join(lines)
+
+
 def machine() -> str:
     import os
 

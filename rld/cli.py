@@ -303,6 +303,29 @@ def bench_rld(method: str, backends: str, sizes: str, n_tracks: int, stride: int
             fh.write(table + "\n")
 
 
+@bench.command("budget")
+@click.option("--backends", default="cpsat,highs,cvxpy", show_default=True)
+@click.option("--sizes", default="30,40", show_default=True, help="Cones per window.")
+@click.option("--budgets", default="0.02,0.05,0.2", show_default=True, help="Seconds.")
+@click.option("--tracks", "n_tracks", default=4, show_default=True, help="Generated tracks.")
+@click.option("--stride", default=25, show_default=True, help="Every k-th pose of each lap.")
+@click.option("--out", default=None, help="Also write the Markdown table to this file.")
+def bench_budget(backends: str, sizes: str, budgets: str, n_tracks: int, stride: int,
+                 out: str | None) -> None:
+    """How far past its time budget an RLD call runs, per backend, size and budget."""
+    mod = _benchmark_module("bench_rld")
+    rows = mod.run_budget(sizes=[int(v) for v in sizes.split(",")],
+                          budgets=[float(v) for v in budgets.split(",")],
+                          backends=[b.strip() for b in backends.split(",")],
+                          n_tracks=n_tracks, stride=stride)
+    table = mod.budget_markdown(rows)
+    click.echo(f"machine: {mod.machine()}")
+    click.echo(table)
+    if out:
+        with open(out, "w") as fh:
+            fh.write(table + "\n")
+
+
 @bench.command("rld-paper")
 @click.option("--method", type=click.Choice(["rld", "rld-sided"]), default="rld",
               show_default=True)

@@ -49,6 +49,14 @@ def test_bench_incremental_quick(dataset_dir):
     assert "| 0% | all |" in result.output and "lane cones" in result.output
 
 
+def test_bench_budget_quick():
+    result = CliRunner().invoke(main, ["bench", "budget", "--backends", "cpsat", "--sizes",
+                                       "12", "--budgets", "0.05", "--tracks", "1",
+                                       "--stride", "100"])
+    assert result.exit_code == 0, result.output
+    assert "| cpsat | 12 | 50 |" in result.output
+
+
 def test_bench_rld_paper_quick():
     result = CliRunner().invoke(main, ["bench", "rld-paper", "--poses", "3"])
     assert result.exit_code == 0, result.output

@@ -60,7 +60,9 @@ class CpSatBackend(Backend):
             for j in range(n):
                 model.add_hint(x[j], bool(hint[j] > 0.5))
         solver = cp_model.CpSolver()
-        solver.parameters.max_time_in_seconds = max(float(time_limit_s), 1e-3)
+        # The budget covers building the CP-SAT model too.
+        solver.parameters.max_time_in_seconds = max(
+            float(time_limit_s) - (time.perf_counter() - t0), 1e-3)
         solver.parameters.num_workers = self.workers
         if program.n_cones <= self.presolve_off_max_cones:
             solver.parameters.cp_model_presolve = False

@@ -9,6 +9,7 @@ import time
 import numpy as np
 
 from rld.backends.base import Backend, BackendResult
+from rld.backends.highs import presolve_option
 from rld.program import LaneProgram
 
 # cvxpy's solver names and how each takes a time limit.
@@ -55,7 +56,8 @@ class CvxpyBackend(Backend):
         if key:
             options[key] = max(float(time_limit_s), 1e-3)
         if self.solver == "HIGHS":
-            options.update(mip_rel_gap=0.0, mip_abs_gap=1e-7, threads=1)
+            options.update(mip_rel_gap=0.0, mip_abs_gap=1e-7, threads=1,
+                           presolve=presolve_option(program.n_cones, time_limit_s))
         if hint is not None:
             x.value = np.asarray(hint, dtype=np.float64)
         try:
