@@ -56,7 +56,7 @@ class _HuangMethod:
 class _RldMethod:
     """RLD (Brandes et al. 2020) with a reusable model and warm starts."""
 
-    backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy")
+    backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy", "auto")
     rankers = False
     sided = False
 
@@ -79,7 +79,7 @@ class _RldSidedMethod(_RldMethod):
 class _RldIncrementalMethod:
     """RLD on a growing map: keeps its lane and re-optimises the frontier (``rld.incremental``)."""
 
-    backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy")
+    backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy", "auto")
     rankers = False
 
     @staticmethod

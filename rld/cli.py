@@ -347,7 +347,7 @@ def bench_rld_paper(method: str, backend: str, n_cones: int, poses: int,
 
 @bench.command("protocol")
 @click.option("--method", type=click.Choice(sorted(METHODS)), default="rld", show_default=True)
-@click.option("--backend", default=None, help="RLD backend (default cpsat).")
+@click.option("--backend", default=None, help="RLD backend (default auto).")
 @click.option("--fp-rates", default="0,0.3", show_default=True)
 @click.option("--range-m", default=50.0, show_default=True)
 @click.option("--every", default=12, show_default=True, help="Every k-th pose of each lap.")

@@ -155,7 +155,8 @@ class RldModel:
         if window.size < 4:
             return Lane.not_found(points, f"only {window.size} cones ahead of the car", stats=stats)
         program = build_program(sub, pose, self.params, no_crossing=self.no_crossing,
-                                start=local_start, strengthen=self.backend.strengthen,
+                                start=local_start,
+                                strengthen=self.backend.strengthen_for(int(window.size)),
                                 sided=self.sided,
                                 colors=None if colors is None else colors[window],
                                 confidence=None if confidence is None else confidence[window],
@@ -205,6 +206,8 @@ class RldModel:
             for comp in cycles:
                 cycle_cut(program, comp)
         stats["solve_time_s"] = time.perf_counter() - t_solve
+        if getattr(self.backend, "last_name", ""):
+            stats["backend"] = f"{self.backend.name}:{self.backend.last_name}"
         stats["objective"] = result.objective
         stats["bound"] = result.bound
         if result.x is None:

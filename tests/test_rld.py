@@ -234,6 +234,27 @@ def test_backends_agree(seed):
         assert values[2] == pytest.approx(values[0], abs=1e-4)
 
 
+def test_auto_backend_picks_by_size_and_reports_its_choice():
+    from rld.backends.auto import AutoBackend
+
+    auto = make_backend(None)
+    assert isinstance(auto, AutoBackend)
+    assert [auto.pick(n).name for n in (4, 16, 17, 30, 31, 60)] == \
+        ["cpsat", "cpsat", "highs", "highs", "cpsat", "cpsat"]
+    assert [auto.strengthen_for(n) for n in (12, 20)] == [False, True]
+    points, pose = instance(2003, 12, fp=2)
+    lanes = {}
+    for n_max, chosen in ((12, "cpsat"), (20, "highs")):
+        p = LaneParams(max_cones=n_max)
+        sub = np.vstack([points, points + [40.0, 0.0]])  # enough cones for either window
+        lane = LaneSolver("rld", p).solve(sub, pose)
+        assert lane.stats["backend"] == f"auto:{chosen}"
+        ref = LaneSolver("rld", p, backend=chosen).solve(sub, pose)
+        assert lane.cost == pytest.approx(ref.cost, abs=1e-6)
+        lanes[n_max] = lane
+    assert all(lane.ok for lane in lanes.values())
+
+
 def _ring_beside_track():
     xs = np.arange(0, 24, 3.5)
     left = np.column_stack([xs, np.full(xs.size, 2.0)])

@@ -4,6 +4,7 @@ back to a 0/1 vector). Add one by registering a ``Backend`` subclass in ``BACKEN
 
 from __future__ import annotations
 
+from rld.backends.auto import AutoBackend
 from rld.backends.base import Backend, BackendResult
 from rld.backends.cpsat import CpSatBackend
 from rld.backends.cvxpy_backend import CvxpyBackend
@@ -13,14 +14,16 @@ BACKENDS: dict[str, type[Backend]] = {
     "cpsat": CpSatBackend,
     "highs": HighsBackend,
     "cvxpy": CvxpyBackend,
+    "auto": AutoBackend,
 }
-DEFAULT_BACKEND = "cpsat"
+DEFAULT_BACKEND = "auto"
 
 __all__ = ["Backend", "BackendResult", "BACKENDS", "DEFAULT_BACKEND", "make_backend"]
 
 
 def make_backend(name: str | None, **options) -> Backend:
-    """The backend called ``name`` (``cpsat``, ``highs``, ``cvxpy`` or ``cvxpy:SOLVER``)."""
+    """The backend called ``name`` (``cpsat``, ``highs``, ``cvxpy``, ``cvxpy:SOLVER`` or
+    ``auto``: CP-SAT or HiGHS by the program's size, ``rld.backends.auto``)."""
     name = DEFAULT_BACKEND if name is None else name
     base, _, solver = name.partition(":")
     if base not in BACKENDS:

@@ -37,6 +37,10 @@ class Backend:
     #: ``strengthen``): they tighten an LP relaxation, which helps LP-based MIP solvers.
     strengthen = True
 
+    def strengthen_for(self, n_cones: int) -> bool:
+        """``strengthen`` for a program of ``n_cones`` cones (``auto`` picks per size)."""
+        return self.strengthen
+
     def solve(
         self, program: LaneProgram, time_limit_s: float, hint: np.ndarray | None = None
     ) -> BackendResult:  # pragma: no cover - interface
