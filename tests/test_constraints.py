@@ -331,12 +331,18 @@ def test_lane_widths_hand_worked():
     assert not C.c_width(L, R1, 3.1, 4.0)
 
 
-@settings(max_examples=60)
-@given(st.integers(0, 10_000), st.integers(1, 6), st.integers(1, 6))
-def test_lane_widths_against_shapely(seed, nl, nr):
+def two_chains(seed, nl, nr):
+    """Two random monotone chains of ``nl`` and ``nr`` points, the second 4 m to the left."""
     rng = np.random.default_rng(seed)
     L = np.cumsum(rng.uniform(0.5, 3, size=(nl, 2)), axis=0)
     R = np.cumsum(rng.uniform(0.5, 3, size=(nr, 2)), axis=0) + [0, 4]
+    return L, R
+
+
+@settings(max_examples=60)
+@given(st.integers(0, 10_000), st.integers(1, 6), st.integers(1, 6))
+def test_lane_widths_against_shapely(seed, nl, nr):
+    L, R = two_chains(seed, nl, nr)
     w = C.lane_widths(L, R)
 
     def geom(xy):
@@ -369,9 +375,7 @@ def test_overlap_widths_hand_worked():
 @settings(max_examples=60)
 @given(st.integers(0, 10_000), st.integers(1, 6), st.integers(2, 6))
 def test_overlap_widths_against_shapely(seed, nl, nr):
-    rng = np.random.default_rng(seed)
-    L = np.cumsum(rng.uniform(0.5, 3, size=(nl, 2)), axis=0)
-    R = np.cumsum(rng.uniform(0.5, 3, size=(nr, 2)), axis=0) + [0, 4]
+    L, R = two_chains(seed, nl, nr)
 
     def paired(Q, T):
         line = LineString(T)
