@@ -4,8 +4,10 @@ lane passes them on every pose, and each check catches what it is for."""
 import numpy as np
 import pytest
 
-from benchmarks import bench_rld_paper as B
+from rld.cli import _benchmark_module
 from rld.types import LaneParams
+
+B = _benchmark_module("bench_rld_paper")  # benchmarks/ is not an installed package
 
 PARAMS = LaneParams(max_cones=12)
 
