@@ -275,17 +275,11 @@ def overlap_widths(left: np.ndarray, right: np.ndarray) -> np.ndarray:
         T = np.asarray(T, dtype=np.float64).reshape(-1, 2)
         if T.shape[0] < 2 or Q.shape[0] == 0:
             continue
-        a, ab = T[:-1], T[1:] - T[:-1]
-        den = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-18)
-        raw = np.einsum("qij,ij->qi", Q[:, None, :] - a[None], ab) / den
-        foot = a[None] + np.clip(raw, 0.0, 1.0)[..., None] * ab[None]
-        d = np.hypot(*(Q[:, None, :] - foot).transpose(2, 0, 1))
-        k = np.argmin(d, axis=1)
-        tk = raw[np.arange(Q.shape[0]), k]
+        _, d, k, t = geo.nearest_on_polyline(Q, T)
         # Beyond an end: the foot before the first cone or past the last (a cone abreast of
         # an end cone, t = 0 or 1 exactly, is paired).
-        at_end = ((k == 0) & (tk < -1e-12)) | ((k == T.shape[0] - 2) & (tk > 1.0 + 1e-12))
-        out.append(d[np.arange(Q.shape[0]), k][~at_end])
+        at_end = ((k == 0) & (t < -1e-12)) | ((k == T.shape[0] - 2) & (t > 1.0 + 1e-12))
+        out.append(d[~at_end])
     return np.concatenate(out) if out else np.zeros(0)
 
 

@@ -27,6 +27,8 @@ __all__ = [
     "cumulative_length",
     "resample_polyline",
     "point_polyline_distance",
+    "segment_parameter",
+    "nearest_on_polyline",
     "ring_is_simple",
     "centerline",
     "lane_ring",
@@ -151,6 +153,31 @@ def point_polyline_distance(p, poly: np.ndarray) -> np.ndarray:
     if poly.shape[0] == 0:
         return np.full(p.shape[0], np.inf)
     return np.array([gk.point_polyline_distance(q[0], q[1], poly) for q in p])
+
+
+def segment_parameter(p, a, b) -> np.ndarray:
+    """Where the foot of ``p`` on the line through ``a``-``b`` lies: 0 at ``a``, 1 at ``b``,
+    unclamped (below 0 before ``a``, above 1 past ``b``). (..., 2) arrays, broadcast; returns
+    (...)."""
+    p, a, b = (np.asarray(x, dtype=np.float64) for x in (p, a, b))
+    ab = b - a
+    return ((p - a) * ab).sum(axis=-1) / np.maximum((ab * ab).sum(axis=-1), 1e-18)
+
+
+def nearest_on_polyline(points, poly: np.ndarray):
+    """The nearest point of the polyline ``poly`` (m >= 2, 2) to each of ``points`` (k, 2):
+    ``(closest (k, 2), distance (k,), segment (k,), t (k,))``, with ``t`` the unclamped
+    ``segment_parameter`` on that segment (below 0 or above 1 only on an end segment, where the
+    nearest point is the polyline's end). Metres."""
+    points = np.atleast_2d(np.asarray(points, dtype=np.float64))
+    poly = np.asarray(poly, dtype=np.float64)
+    a, b = poly[:-1], poly[1:]
+    raw = segment_parameter(points[:, None, :], a[None], b[None])
+    q = a[None] + np.clip(raw, 0.0, 1.0)[..., None] * (b - a)[None]
+    d = np.hypot(*(points[:, None, :] - q).transpose(2, 0, 1))
+    k = np.argmin(d, axis=1)
+    rows = np.arange(points.shape[0])
+    return q[rows, k], d[rows, k], k, raw[rows, k]
 
 
 def ring_is_simple(ring: np.ndarray) -> bool:

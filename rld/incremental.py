@@ -227,14 +227,12 @@ class IncrementalRld:
         sides = [L.copy(), R.copy()]
         count = 0
         for c in new:
-            lane_edges = np.vstack([_edges(S, self.closed) for S in sides])
+            per_side = [_edges(S, self.closed) for S in sides]
+            lane_edges = np.vstack(per_side)
             best = None
-            for s_i, S in enumerate(sides):
-                e = _edges(S, self.closed)
+            for s_i, (S, e) in enumerate(zip(sides, per_side, strict=True)):
                 a_xy, b_xy = points[e[:, 0]], points[e[:, 1]]
-                ab = b_xy - a_xy
-                t = ((points[c] - a_xy) * ab).sum(axis=1) / np.maximum((ab ** 2).sum(axis=1),
-                                                                       1e-12)
+                t = geo.segment_parameter(points[c], a_xy, b_xy)
                 lat = geo.point_segment_distance(points[c], a_xy, b_xy)
                 for i in np.flatnonzero((t > 0) & (t < 1) & (lat < p.min_width_m / 2)):
                     delta = self._insertion_delta(points, S, int(i), int(c), lane_edges)

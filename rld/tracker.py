@@ -86,18 +86,10 @@ def project_onto(points: np.ndarray, poly: np.ndarray) -> tuple[np.ndarray, np.n
     if poly.shape[0] == 1:
         d = np.hypot(*(points - poly[0]).T)
         return np.repeat(poly[:1], points.shape[0], axis=0), d, np.zeros(points.shape[0])
-    a, b = poly[:-1], poly[1:]
-    ab = b - a
-    len2 = np.maximum((ab**2).sum(axis=1), 1e-18)
-    t = ((points[:, None, :] - a[None]) * ab[None]).sum(axis=2) / len2[None]
-    t = np.clip(t, 0.0, 1.0)
-    q = a[None] + t[..., None] * ab[None]
-    d = np.hypot(*(points[:, None, :] - q).transpose(2, 0, 1))
-    k = np.argmin(d, axis=1)
-    rows = np.arange(points.shape[0])
-    s = geo.cumulative_length(poly)
-    arc = s[k] + t[rows, k] * np.sqrt(len2[k])
-    return q[rows, k], d[rows, k], arc
+    q, d, k, t = geo.nearest_on_polyline(points, poly)
+    seg = np.hypot(*(poly[1:] - poly[:-1]).T)
+    arc = geo.cumulative_length(poly)[k] + np.clip(t, 0.0, 1.0) * seg[k]
+    return q, d, arc
 
 
 def match_score(candidate: np.ndarray, lane: np.ndarray, tau_m: float,

@@ -173,6 +173,33 @@ def test_point_segment_distance_hand_worked():
     np.testing.assert_allclose(out, [4.0, 5.0, 0.0], atol=1e-12)
 
 
+def test_segment_parameter_and_nearest_on_polyline_hand_worked():
+    a, b = np.array([0.0, 0.0]), np.array([4.0, 0.0])
+    p = np.array([[1.0, 3.0], [-2.0, 1.0], [6.0, -1.0], [4.0, 2.0]])
+    np.testing.assert_allclose(geo.segment_parameter(p, a, b), [0.25, -0.5, 1.5, 1.0])
+    poly = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0]])
+    q, d, k, t = geo.nearest_on_polyline(p, poly)
+    # (1, 3): 3 m above the first segment at t = 0.25; (-2, 1): before the start;
+    # (6, -1): past the corner, nearest the corner itself (first segment at t = 1.5);
+    # (4, 2): on the second segment, halfway.
+    np.testing.assert_allclose(q, [[1, 0], [0, 0], [4, 0], [4, 2]])
+    np.testing.assert_allclose(d, [3, math.sqrt(5), math.sqrt(5), 0])
+    assert k.tolist() == [0, 0, 0, 1]
+    np.testing.assert_allclose(t, [0.25, -0.5, 1.5, 0.5])
+
+
+@settings(max_examples=60)
+@given(st.integers(0, 10_000), st.integers(2, 6))
+def test_nearest_on_polyline_matches_shapely(seed, m):
+    rng = np.random.default_rng(seed)
+    poly = np.cumsum(rng.uniform(0.5, 3, size=(m, 2)), axis=0)
+    pts = rng.uniform(-2, 12, size=(8, 2))
+    q, d, _, _ = geo.nearest_on_polyline(pts, poly)
+    line = LineString(poly)
+    np.testing.assert_allclose(d, [line.distance(Point(x)) for x in pts], atol=1e-9)
+    np.testing.assert_allclose(np.hypot(*(q - pts).T), d, atol=1e-9)
+
+
 def test_bad_shape_is_rejected():
     with pytest.raises(ValueError):
         geo.point_segment_distance([1.0, 2.0, 3.0], (0, 0), (1, 0))
