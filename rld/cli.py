@@ -116,6 +116,14 @@ def solve(map_path: str, pose_text: str, method: str, plot_path: str | None) -> 
         sys.exit(1)
 
 
+def _emit(text: str, out: str | None) -> None:
+    """Print a benchmark's Markdown and, with ``--out``, also write it to that file."""
+    click.echo(text)
+    if out:
+        with open(out, "w") as fh:
+            fh.write(text + "\n")
+
+
 def _benchmark_module(name: str):
     """Import ``benchmarks.NAME`` from the working directory or from this checkout."""
     import importlib
@@ -297,10 +305,7 @@ def bench_rld(method: str, backends: str, sizes: str, n_tracks: int, stride: int
                    n_tracks=n_tracks, stride=stride, time_limit_s=time_limit_s, method=method)
     table = mod.to_markdown(rows, time_limit_s)
     click.echo(f"machine: {mod.machine()}")
-    click.echo(table)
-    if out:
-        with open(out, "w") as fh:
-            fh.write(table + "\n")
+    _emit(table, out)
 
 
 @bench.command("budget")
@@ -320,10 +325,7 @@ def bench_budget(backends: str, sizes: str, budgets: str, n_tracks: int, stride:
                           n_tracks=n_tracks, stride=stride)
     table = mod.budget_markdown(rows)
     click.echo(f"machine: {mod.machine()}")
-    click.echo(table)
-    if out:
-        with open(out, "w") as fh:
-            fh.write(table + "\n")
+    _emit(table, out)
 
 
 @bench.command("rld-paper")
@@ -339,10 +341,7 @@ def bench_rld_paper(method: str, backend: str, n_cones: int, poses: int,
     mod = _benchmark_module("bench_rld_paper")
     table = mod.to_markdown(mod.run(backend=backend, n_cones=n_cones, poses=poses,
                                     method=method))
-    click.echo(table)
-    if out:
-        with open(out, "w") as fh:
-            fh.write(table + "\n")
+    _emit(table, out)
 
 
 @bench.command("protocol")
@@ -364,10 +363,7 @@ def bench_protocol(method: str, backend: str | None, fp_rates: str, range_m: flo
     except FileNotFoundError as exc:
         raise click.ClickException(str(exc)) from exc
     table = mod.to_markdown(rows)
-    click.echo(table)
-    if out:
-        with open(out, "w") as fh:
-            fh.write(table + "\n")
+    _emit(table, out)
 
 
 @bench.command("incremental")
@@ -400,10 +396,7 @@ def bench_incremental(range_m: float, fp_rates: str, every: int, track_ids: str,
         raise click.ClickException(str(exc)) from exc
     command = "rld bench incremental " + " ".join(shlex.quote(a) for a in sys.argv[3:])
     text = mod.to_markdown(records, range_m, command=command.strip())
-    click.echo(text)
-    if out:
-        with open(out, "w") as fh:
-            fh.write(text + "\n")
+    _emit(text, out)
 
 
 @bench.command("clc")
@@ -432,10 +425,7 @@ def bench_clc(ranges: str, fp_rates: str, every: int, ranker: str | None, iterat
                            f"{v['first_call_s']:.2f} s, second call "
                            f"{1000 * v['second_call_s']:.2f} ms" for k, v in ct.items()))
     text = "\n\n".join(parts)
-    click.echo(text)
-    if out:
-        with open(out, "w") as fh:
-            fh.write(text + "\n")
+    _emit(text, out)
 
 
 if __name__ == "__main__":  # pragma: no cover
