@@ -29,6 +29,15 @@ def _frames(n_tracks: int, stride: int, fp_rate: float = 0.2):
             yield lap, k
 
 
+def _summary(seconds: list[float], statuses: list[str]) -> dict:
+    """Calls, median / p95 / max in ms and the status counts of one benchmark cell."""
+    ms = 1000 * np.array(seconds)
+    n_opt, n_feas = statuses.count("OPTIMAL"), statuses.count("FEASIBLE")
+    return {"calls": len(ms), "median_ms": float(np.median(ms)),
+            "p95_ms": float(np.percentile(ms, 95)), "max_ms": float(ms.max()),
+            "optimal": n_opt, "feasible": n_feas, "no_lane": len(statuses) - n_opt - n_feas}
+
+
 def run(sizes=SIZES, backends=BACKENDS, n_tracks: int = 4, stride: int = 25,
         time_limit_s: float = 1.0, progress: bool = True, method: str = "rld") -> list[dict]:
     """One row per (backend, n, warm): median / p95 / max latency in ms and status counts."""
@@ -61,18 +70,8 @@ def run(sizes=SIZES, backends=BACKENDS, n_tracks: int = 4, stride: int = 25,
                     lat.append(time.perf_counter() - t0)
                     statuses.append(lane.status.name)
                     bar.update(1)
-                lat_ms = 1000 * np.array(lat)
-                rows.append({
-                    "method": method,
-                    "backend": backend, "n": n, "warm": warm, "calls": len(lat),
-                    "median_ms": float(np.median(lat_ms)),
-                    "p95_ms": float(np.percentile(lat_ms, 95)),
-                    "max_ms": float(lat_ms.max()),
-                    "optimal": statuses.count("OPTIMAL"),
-                    "feasible": statuses.count("FEASIBLE"),
-                    "no_lane": len(statuses) - statuses.count("OPTIMAL")
-                    - statuses.count("FEASIBLE"),
-                })
+                rows.append({"method": method, "backend": backend, "n": n, "warm": warm,
+                             **_summary(lat, statuses)})
     bar.close()
     return rows
 
@@ -102,14 +101,8 @@ def run_budget(sizes=(30, 40), budgets=(0.02, 0.05, 0.2), backends=BACKENDS,
                     over.append(dt - budget - lane.stats.get("build_time_s", 0.0))
                     statuses.append(lane.status.name)
                     bar.update(1)
-                ms = 1000 * np.array(over)
-                rows.append({"backend": backend, "n": n, "budget_s": budget, "calls": len(ms),
-                             "median_ms": float(np.median(ms)),
-                             "p95_ms": float(np.percentile(ms, 95)), "max_ms": float(ms.max()),
-                             "optimal": statuses.count("OPTIMAL"),
-                             "feasible": statuses.count("FEASIBLE"),
-                             "no_lane": len(statuses) - statuses.count("OPTIMAL")
-                             - statuses.count("FEASIBLE")})
+                rows.append({"backend": backend, "n": n, "budget_s": budget,
+                             **_summary(over, statuses)})
     bar.close()
     return rows
 
