@@ -11,8 +11,8 @@ only for quick runs, not the car's figures.
 
 Per call it records the mode (``start``, ``extend``, ``closed``; a restart is a ``start``
 call), ``lane_cones`` (the kept lane), and for extend calls the frontier program's size: its
-cones, columns and rows and its solve time (the stats of the last frontier solve, read from
-``solver._impl.model._last_frontier`` right after the call).
+cones, columns and rows and its solve time (``lane.stats["frontier"]``, the stats of the last
+frontier solve).
 """
 
 from __future__ import annotations
@@ -74,7 +74,6 @@ def run(range_m: float = 50.0, fp_rates=(0.0, 0.1, 0.3), every: int = 1,
             lap = simulate_lap(track, range_m=range_m, fp_rate=fp, seed=seed)
             n = min(len(lap), QUICK_POSES) if quick else len(lap)
             solver = LaneSolver(METHOD)
-            model = solver._impl.model
             for k in tqdm(range(0, n, every), desc=f"{track.name} FP={fp:.0%}",
                           disable=not progress, leave=False):
                 f = lap.frame(k)
@@ -91,11 +90,9 @@ def run(range_m: float = 50.0, fp_rates=(0.0, 0.1, 0.3), every: int = 1,
                        "restarts": int(st.get("restarts", 0)),
                        "rollbacks": int(st.get("rollbacks", 0))}
                 if mode == "extend":
-                    fr = dict(getattr(model, "_last_frontier", None) or {})
-                    rec.update(n_cones_used=int(st.get("n_cones_used",
-                                                       fr.get("n_cones_used", 0))),
-                               n_cols=st.get("n_cols", fr.get("n_cols")),
-                               n_rows=st.get("n_rows", fr.get("n_rows")),
+                    fr = st.get("frontier", {})
+                    rec.update(n_cones_used=int(st.get("n_cones_used", 0)),
+                               n_cols=fr.get("n_cols"), n_rows=fr.get("n_rows"),
                                solve_s=fr.get("solve_time_s"))
                 records.append(rec)
     return records

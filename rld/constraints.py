@@ -66,16 +66,29 @@ def edge_lengths(points: np.ndarray, edges: np.ndarray) -> np.ndarray:
     return np.hypot(d[:, 0], d[:, 1])
 
 
-def _nearby_edge_pairs(points: np.ndarray, edges: np.ndarray, reach_m: float) -> np.ndarray:
-    """Pairs (e, f), e < f, of edges that share no cone and whose segments may come within
-    ``reach_m`` of each other (a superset: midpoints within reach + the longest edge)."""
-    if edges.shape[0] < 2:
+def _nearby_edge_pairs(points: np.ndarray, edges: np.ndarray, reach_m: float,
+                       other: np.ndarray | None = None) -> np.ndarray:
+    """Pairs of edges that share no cone and whose segments may come within ``reach_m`` of
+    each other (a superset: midpoints within reach + the longest edge). Without ``other``:
+    pairs (e, f), e < f, within ``edges``; with it: pairs (e, f), e into ``edges``, f into
+    ``other``. Sorted by (e, f)."""
+    if other is None and edges.shape[0] < 2:
+        return np.zeros((0, 2), dtype=np.int64)
+    if other is not None and (edges.shape[0] == 0 or other.shape[0] == 0):
         return np.zeros((0, 2), dtype=np.int64)
     mid = (points[edges[:, 0]] + points[edges[:, 1]]) / 2
     longest = float(edge_lengths(points, edges).max())
-    pairs = cKDTree(mid).query_pairs(reach_m + longest + 1e-9, output_type="ndarray")
-    pairs = np.sort(pairs.astype(np.int64), axis=1)
-    a, b = edges[pairs[:, 0]], edges[pairs[:, 1]]
+    if other is None:
+        pairs = cKDTree(mid).query_pairs(reach_m + longest + 1e-9, output_type="ndarray")
+        pairs = np.sort(pairs.astype(np.int64), axis=1)
+        b = edges[pairs[:, 1]]
+    else:
+        omid = (points[other[:, 0]] + points[other[:, 1]]) / 2
+        reach = reach_m + (longest + float(edge_lengths(points, other).max())) / 2 + 1e-9
+        near = cKDTree(mid).sparse_distance_matrix(cKDTree(omid), reach, output_type="ndarray")
+        pairs = np.column_stack([near["i"], near["j"]]).astype(np.int64).reshape(-1, 2)
+        b = other[pairs[:, 1]]
+    a = edges[pairs[:, 0]]
     disjoint = (
         (a[:, 0] != b[:, 0]) & (a[:, 0] != b[:, 1]) & (a[:, 1] != b[:, 0]) & (a[:, 1] != b[:, 1])
     )
@@ -84,7 +97,8 @@ def _nearby_edge_pairs(points: np.ndarray, edges: np.ndarray, reach_m: float) ->
     return np.ascontiguousarray(pairs[order])
 
 
-def width_conflicts(points: np.ndarray, edges: np.ndarray, min_width_m: float) -> np.ndarray:
+def width_conflicts(points: np.ndarray, edges: np.ndarray, min_width_m: float,
+                    other: np.ndarray | None = None) -> np.ndarray:
     """Edge pairs that cannot both be in a lane because the lane would be narrower than
     ``min_width_m`` (RLD eqs 6-8).
 
@@ -92,25 +106,28 @@ def width_conflicts(points: np.ndarray, edges: np.ndarray, min_width_m: float) -
     ``MinDist(e, f) < d_min`` and ``End(e, f) = 0`` (our reading of eq. 7, see the module
     docstring): the segments come closer than the narrowest lane somewhere other than
     end to end. Consecutive edges of one boundary are closest end to end and stay allowed.
-    Returns (K, 2) int64 edge indices, ``e < f``, sorted.
+    Returns (K, 2) int64 edge indices, sorted: pairs ``e < f`` within ``edges``, or, given
+    ``other`` (an (F, 2) edge array), pairs of an edge of ``edges`` and one of ``other``.
     """
-    pairs = _nearby_edge_pairs(points, edges, min_width_m)
+    pairs = _nearby_edge_pairs(points, edges, min_width_m, other)
     if pairs.shape[0] == 0:
         return pairs
-    e, f = edges[pairs[:, 0]], edges[pairs[:, 1]]
+    e, f = edges[pairs[:, 0]], (edges if other is None else other)[pairs[:, 1]]
     d, end = geo.segment_distance_end(points[e[:, 0]], points[e[:, 1]], points[f[:, 0]],
                                       points[f[:, 1]])
     return pairs[(d < min_width_m) & ~end]
 
 
-def crossing_edge_pairs(points: np.ndarray, edges: np.ndarray) -> np.ndarray:
+def crossing_edge_pairs(points: np.ndarray, edges: np.ndarray,
+                        other: np.ndarray | None = None) -> np.ndarray:
     """Edge pairs with four distinct cones whose segments share a point (cross, touch or
     overlap): no lane may hold both (the no-crossing constraint of RLD section V; CLC C_poly
-    implies it). Returns (K, 2) int64 edge indices, ``e < f``, sorted."""
-    pairs = _nearby_edge_pairs(points, edges, 0.0)
+    implies it). Returns (K, 2) int64 edge indices, sorted: pairs ``e < f`` within
+    ``edges``, or, given ``other``, pairs of an edge of ``edges`` and one of ``other``."""
+    pairs = _nearby_edge_pairs(points, edges, 0.0, other)
     if pairs.shape[0] == 0:
         return pairs
-    e, f = edges[pairs[:, 0]], edges[pairs[:, 1]]
+    e, f = edges[pairs[:, 0]], (edges if other is None else other)[pairs[:, 1]]
     hit = geo.segments_intersect(points[e[:, 0]], points[e[:, 1]], points[f[:, 0]],
                                  points[f[:, 1]])
     return pairs[hit]
@@ -121,7 +138,7 @@ def blocked_by_fixed(points: np.ndarray, edges: np.ndarray, fixed: np.ndarray,
     """Which ``edges`` can no longer be in a lane that already holds the ``fixed`` edges:
     those that cross one of them or come closer than ``min_width_m`` to one (other than end
     to end), by exactly the families of ``crossing_edge_pairs`` and ``width_conflicts`` (RLD
-    eqs 6-8 and section V) on the union of both edge sets. ``edges`` and ``fixed``: (E, 2)
+    eqs 6-8 and section V), taken across the two sets. ``edges`` and ``fixed``: (E, 2)
     and (F, 2) int64 indices into ``points``; returns (E,) bool. The incremental solver
     (``rld.incremental``) blocks its frontier's candidate edges against the kept lane so."""
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
@@ -129,13 +146,9 @@ def blocked_by_fixed(points: np.ndarray, edges: np.ndarray, fixed: np.ndarray,
     out = np.zeros(edges.shape[0], dtype=bool)
     if edges.shape[0] == 0 or fixed.shape[0] == 0:
         return out
-    union = np.vstack([np.sort(edges, axis=1), np.sort(fixed, axis=1)])
-    bad = np.vstack([crossing_edge_pairs(points, union),
-                     width_conflicts(points, union, min_width_m)])
-    E = edges.shape[0]
-    for a, b in ((bad[:, 0], bad[:, 1]), (bad[:, 1], bad[:, 0])):
-        hit = (a < E) & (b >= E)
-        out[a[hit]] = True
+    edges, fixed = np.sort(edges, axis=1), np.sort(fixed, axis=1)
+    out[crossing_edge_pairs(points, edges, fixed)[:, 0]] = True
+    out[width_conflicts(points, edges, min_width_m, fixed)[:, 0]] = True
     return out
 
 

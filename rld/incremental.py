@@ -78,6 +78,8 @@ POSE_JUMP_M = 5.0
 POSE_JUMP_RAD = math.radians(45.0)
 #: Fewer cones than this ahead of the car on a side: the car has reached the lane's end.
 MIN_AHEAD = 6
+#: The frontier program's stats an extend call passes on in ``lane.stats["frontier"]``.
+FRONTIER_STATS = ("n_cones_used", "n_cols", "n_rows", "solve_time_s", "backend", "objective")
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -290,9 +292,11 @@ class IncrementalRld:
             edges.append(e)
             new.append(np.arange(e.shape[0]) >= f0)
         edges, new = np.vstack(edges), np.concatenate(new)
-        bad = np.vstack([crossing_edge_pairs(points, edges),
-                         width_conflicts(points, edges, self.params.min_width_m)])
-        return not np.any(new[bad[:, 0]] | new[bad[:, 1]])
+        fresh, kept = edges[new], edges[~new]
+        w = self.params.min_width_m
+        return not any(pairs.shape[0] for pairs in (
+            crossing_edge_pairs(points, fresh), width_conflicts(points, fresh, w),
+            crossing_edge_pairs(points, fresh, kept), width_conflicts(points, fresh, w, kept)))
 
     def _frontier_window(self, points, free, left, right, released=()) -> np.ndarray:
         """The frontier program's cones (indices into ``points``): the two junctions
@@ -424,6 +428,8 @@ class IncrementalRld:
             return self._start(points, pose, time_limit_s, stats,
                                "the car reached the end of the lane")
         stats["n_cones_used"] = int(self._last_frontier.get("n_cones_used", 0))
+        stats["frontier"] = {k: self._last_frontier[k] for k in FRONTIER_STATS
+                             if k in self._last_frontier}
         if closes:
             self.closed = True
         self.left_xy, self.right_xy = points[L], points[R]

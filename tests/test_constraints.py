@@ -100,6 +100,39 @@ def test_width_conflicts_and_crossings_match_brute_force(seed, n):
     assert C.crossing_edge_pairs(pts, edges).tolist() == _brute_pairs(pts, edges, crossing)
 
 
+def _brute_cross_pairs(pts, edges, other, predicate):
+    out = []
+    for e, f in itertools.product(range(len(edges)), range(len(other))):
+        if set(edges[e].tolist()) & set(other[f].tolist()):
+            continue
+        if predicate(pts[edges[e]], pts[other[f]]):
+            out.append([e, f])
+    return out
+
+
+@settings(max_examples=40)
+@given(st.integers(0, 10_000), st.integers(4, 25), st.integers(1, 5))
+def test_pairs_across_two_edge_sets_match_brute_force(seed, n, short):
+    """``other=``: pairs of an edge of one set and one of another, equal to brute force over
+    the product (the sets may share cones; a short second set tests the distance bound)."""
+    pts = random_points(seed, n)
+    edges = C.candidate_edges(pts, 5.5)
+    rng = np.random.default_rng(seed)
+    mask = rng.random(len(edges)) < 0.5
+    a, b = edges[mask], edges[~mask]
+    b = b[C.edge_lengths(pts, b) <= short] if short < 5 else b
+
+    def narrow(x, y):
+        d, end = geo.segment_distance_end(x[0], x[1], y[0], y[1])
+        return bool(d < 2.5 and not end)
+
+    def crossing(x, y):
+        return LineString(x).intersects(LineString(y))
+
+    assert C.width_conflicts(pts, a, 2.5, b).tolist() == _brute_cross_pairs(pts, a, b, narrow)
+    assert C.crossing_edge_pairs(pts, a, b).tolist() == _brute_cross_pairs(pts, a, b, crossing)
+
+
 # --- edges blocked by a fixed part of the lane (the incremental frontier) ---------------------
 
 

@@ -100,6 +100,10 @@ def test_frontier_program_stays_bounded_as_the_lane_grows():
             lengths.append(lane.stats["lane_cones"])
             # The window counts the junction cones: never more than frontier_max_cones in all.
             assert sizes[-1] <= model.frontier_max_cones
+            # The frontier program's own stats come with the lane (what the benchmark reads).
+            fr = lane.stats["frontier"]
+            assert fr["n_cones_used"] == sizes[-1] and fr["n_cols"] > 0 and fr["n_rows"] > 0
+            assert 0.0 <= fr["solve_time_s"] < 60.0
     assert max(lengths) > 60  # the lane grew to the whole loop ...
     # ... while the frontier program never took more than its window plus the junction cones.
     assert max(sizes) <= LaneParams().max_cones + 4
