@@ -36,6 +36,7 @@ from rld import geometry as geo
 from rld.api import LaneSolver
 from rld.constraints import c_poly, overlap_widths
 from rld.generator import generate_track
+from rld.program import build_program
 from rld.metrics import TOLERANT_DISTANCE_M
 from rld.solver import cone_window
 from rld.tracks import Track
@@ -196,6 +197,29 @@ def quality_failures(frame: Frame, left: np.ndarray, right: np.ndarray, params: 
     return out
 
 
+def truth_in_program(frame: Frame, params: LaneParams) -> float | None:
+    """RLD's objective (eq. 29) of the true lane (``frame.truth``) in the program the solver
+    builds for this frame's window, or None when the true lane is not a solution of that
+    program (an edge pruned, or a row violated). Against the solver's optimum this splits the
+    inaccurate solves: the truth feasible and cheaper would be the solver's fault (a missed
+    optimum); dearer or infeasible, the model's (the optimum is not the true lane)."""
+    window, _ = cone_window(frame.points, frame.pose, params)
+    program = build_program(frame.points[window], frame.pose, params, no_crossing=True)
+    local = {int(g): k for k, g in enumerate(window)}
+    eid = {(int(i), int(j)): k for k, (i, j) in enumerate(program.edges)}
+    chosen = []
+    for side in frame.truth:
+        if any(int(c) not in local for c in side):
+            return None
+        for a, b in zip(side[:-1], side[1:], strict=True):
+            key = (min(local[int(a)], local[int(b)]), max(local[int(a)], local[int(b)]))
+            if key not in eid:
+                return None
+            chosen.append(eid[key])
+    x = program.solution_from_edges(np.array(chosen, dtype=np.int64))
+    return program.objective(x) if program.is_feasible(x) else None
+
+
 def run(backend: str = "cpsat", n_cones: int = 12, poses: int = 60, range_m: float = 20.0,
         seed: int = 0, time_limit_s: float = 0.4, progress: bool = True, method: str = "rld",
         **overrides) -> list[dict]:
@@ -213,7 +237,8 @@ def run(backend: str = "cpsat", n_cones: int = 12, poses: int = 60, range_m: flo
     for frame in frames(seed, poses, range_m, params):
         cell = cells.setdefault((frame.topology, frame.ratio), {
             "topology": frame.topology, "ratio": frame.ratio, "solves": 0, "bad": 0,
-            "bad_tolerant": 0, "no_lane": 0, "checks": Counter(), "lat": []})
+            "bad_tolerant": 0, "no_lane": 0, "checks": Counter(), "lat": [],
+            "truth_dearer": 0, "truth_infeasible": 0, "truth_cheaper": 0})
         t0 = time.perf_counter()
         lane = LaneSolver(method, params, backend).solve(frame.points, frame.pose,
                                                          time_limit_s=time_limit_s)
@@ -225,6 +250,11 @@ def run(backend: str = "cpsat", n_cones: int = 12, poses: int = 60, range_m: flo
         cell["bad"] += bool(fails)
         cell["bad_tolerant"] += bool(quality_failures(frame, left, right, params, True))
         cell["checks"].update(fails)
+        if fails and lane.ok and method == "rld" and "objective" in lane.stats:
+            truth = truth_in_program(frame, params)
+            key = ("truth_infeasible" if truth is None else "truth_cheaper"
+                   if truth < lane.stats["objective"] - 1e-6 else "truth_dearer")
+            cell[key] += 1
         bar.update(1)
     bar.close()
     rows = []
@@ -234,20 +264,30 @@ def run(backend: str = "cpsat", n_cones: int = 12, poses: int = 60, range_m: flo
                      "inaccurate_pct": 100.0 * cell["bad"] / n,
                      "inaccurate_tolerant_pct": 100.0 * cell["bad_tolerant"] / n,
                      "checks": dict(cell["checks"]), "no_lane": cell["no_lane"],
+                     "truth_dearer": cell["truth_dearer"],
+                     "truth_infeasible": cell["truth_infeasible"],
+                     "truth_cheaper": cell["truth_cheaper"],
                      "median_ms": 1000 * float(np.median(cell["lat"]))})
     return rows
 
 
 def to_markdown(rows: list[dict]) -> str:
+    """The table of ``run``: per cell the inaccurate %, the failed checks, and where the
+    inaccurate solves come from (``truth_in_program``): the true lane dearer than the
+    optimum or not a solution of the program (the model's), or cheaper (the solver's)."""
     checks = ("set", "side", "crossing", "width")
+    origin = ("truth_dearer", "truth_infeasible", "truth_cheaper")
     lines = ["| topology | false : real | solves | inaccurate (%) | tolerant (%) | "
-             + " | ".join(checks) + " | no lane | median (ms) |",
-             "|---|---|---|---|---|" + "---|" * len(checks) + "---|---|"]
+             + " | ".join(checks) + " | no lane | truth dearer | truth not a solution | "
+             "truth cheaper | median (ms) |",
+             "|---|---|---|---|---|" + "---|" * len(checks) + "---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['topology']} | {r['ratio']} | {r['solves']} | "
                      f"{r['inaccurate_pct']:.1f} | {r['inaccurate_tolerant_pct']:.1f} | "
                      + " | ".join(str(r["checks"].get(c, 0)) for c in checks)
-                     + f" | {r['no_lane']} | {r['median_ms']:.1f} |")
+                     + f" | {r['no_lane']} | "
+                     + " | ".join(str(r.get(k, 0)) for k in origin)
+                     + f" | {r['median_ms']:.1f} |")
     for ratio in RATIOS:
         sel = [r for r in rows if r["ratio"] == ratio]
         tot = sum(r["solves"] for r in sel)
@@ -258,5 +298,7 @@ def to_markdown(rows: list[dict]) -> str:
         lines.append(f"| all | {ratio} | {tot} | {pct('inaccurate_pct'):.1f} | "
                      f"{pct('inaccurate_tolerant_pct'):.1f} | "
                      + " | ".join(str(sum(r["checks"].get(c, 0) for r in sel)) for c in checks)
-                     + f" | {sum(r['no_lane'] for r in sel)} | |")
+                     + f" | {sum(r['no_lane'] for r in sel)} | "
+                     + " | ".join(str(sum(r.get(k, 0) for r in sel)) for k in origin)
+                     + " | |")
     return "\n".join(lines)

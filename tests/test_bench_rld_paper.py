@@ -58,3 +58,27 @@ def test_behind_and_on_line_cones_are_neutral(all_frames):
     gl, gr = g.truth
     assert "set" in B.quality_failures(g, np.r_[gl, on], gr, PARAMS)
     assert "set" not in B.quality_failures(g, np.r_[gl, on], gr, PARAMS, tolerant=True)
+
+
+def test_truth_in_program_is_the_shared_cost_and_never_beats_the_optimum(all_frames):
+    """The diagnostic that splits inaccurate solves into the model's and the solver's: the
+    true lane's objective in the solver's own program is the shared ``lane_cost``, and an
+    optimal solve is never dearer than it (which would be a missed optimum)."""
+    from rld.api import LaneSolver
+    from rld.costs import lane_cost
+    from rld.types import LaneStatus
+
+    compared = 0
+    for f in all_frames[::3]:
+        truth = B.truth_in_program(f, PARAMS)
+        if truth is None:
+            continue
+        assert truth == pytest.approx(lane_cost(f.points, *f.truth, f.pose, PARAMS), abs=1e-6)
+        lane = LaneSolver("rld", PARAMS, "cpsat").solve(f.points, f.pose, time_limit_s=5.0)
+        if lane.status == LaneStatus.OPTIMAL:
+            assert lane.stats["objective"] <= truth + 1e-6, (f.topology, f.ratio)
+            compared += 1
+    assert compared >= 20
+    # A straight's 4 m spacing is longer than a 3.5 m limit: the truth is no solution.
+    f = next(f for f in all_frames if f.topology == "straight")
+    assert B.truth_in_program(f, LaneParams(max_cones=12, max_cone_spacing_m=3.5)) is None
