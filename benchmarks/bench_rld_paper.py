@@ -36,8 +36,8 @@ from rld import geometry as geo
 from rld.api import LaneSolver
 from rld.constraints import c_poly, overlap_widths
 from rld.generator import generate_track
-from rld.program import build_program
 from rld.metrics import TOLERANT_DISTANCE_M
+from rld.program import build_program
 from rld.solver import cone_window
 from rld.tracks import Track
 from rld.types import LaneParams, Pose
