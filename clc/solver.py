@@ -32,7 +32,7 @@ from scipy.spatial import cKDTree
 
 from clc.ranker import get_ranker
 from clc.search import GRAPHS, closable, enumerate_candidates, merge_results
-from rld.constraints import find_starting_vertices, lane_is_feasible
+from rld.constraints import lane_is_feasible, starting_vertex_pairs
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
 __all__ = ["ClcModel", "MATCH_TOLERANCE_M"]
@@ -114,7 +114,9 @@ class ClcModel:
               confidence=None) -> Lane:
         t0 = time.perf_counter()
         stats: dict = {"ranker": self.ranker_name, "graph": self.graph}
-        start = find_starting_vertices(points, pose, self.params.near_radius_m)
+        pairs = starting_vertex_pairs(points, pose, self.params.near_radius_m,
+                                      int(self.params.start_pairs))
+        start = pairs[0] if pairs else None
         guide = None
         if self.warm_start and self._prev is not None and start is not None:
             tree = cKDTree(points)
@@ -127,7 +129,16 @@ class ClcModel:
             res = enumerate_candidates(points, pose, self.params, graph=self.graph, start=start)
         else:
             res = self._split_search(points, pose, start, guide)
-        stats.update(iterations=res.iterations, complete=res.complete,
+        # No feasible path pair from the best start pair: the runners-up, one at a time
+        # (LaneParams.start_pairs), each with a fresh search.
+        fallbacks, iterations = 0, res.iterations
+        for other in pairs[1:]:
+            if res.candidates:
+                break
+            res = enumerate_candidates(points, pose, self.params, graph=res.graph, start=other)
+            fallbacks, iterations = fallbacks + 1, iterations + res.iterations
+        stats["start_fallbacks"] = fallbacks
+        stats.update(iterations=iterations, complete=res.complete,
                      n_candidates=len(res.candidates), n_cones_used=int(points.shape[0]))
         if colors is not None or confidence is not None:
             stats["note"] = "CLC does not use colors or confidence (section III-A)"

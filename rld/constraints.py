@@ -42,6 +42,7 @@ __all__ = [
     "c_width",
     "lane_is_feasible",
     "find_starting_vertices",
+    "starting_vertex_pairs",
 ]
 
 
@@ -324,6 +325,28 @@ def lane_is_feasible(left: np.ndarray, right: np.ndarray, params, closed: bool =
     )
 
 
+def starting_vertex_pairs(
+    points: np.ndarray, pose: Pose, radius_m: float, k: int = 1
+) -> list[tuple[int, int]]:
+    """The ``k`` best (left, right) start pairs of CLC's ``find_starting_vertices`` (IV-C),
+    best first (see there); fewer when fewer pairs exist, none when a side has no candidate."""
+    near = np.flatnonzero(near_car_mask(points, pose, radius_m))
+    if near.size < 2:
+        return []
+    local = pose.to_local(points[near])
+    lefts, rights = near[local[:, 1] > 0], near[local[:, 1] < 0]
+    if lefts.size == 0 or rights.size == 0:
+        return []
+    ll, rl = local[local[:, 1] > 0], local[local[:, 1] < 0]
+    asym = np.hypot(ll[:, None, 0] - rl[None, :, 0], ll[:, None, 1] + rl[None, :, 1])
+    reach = np.hypot(ll[:, 0], ll[:, 1])[:, None] + np.hypot(rl[:, 0], rl[:, 1])[None, :]
+    li, ri = np.meshgrid(lefts, rights, indexing="ij")
+    # Most symmetric first; among equals (to a micrometre) the pair nearest the car, then the
+    # lowest indices, so the choice does not depend on the order of the input.
+    order = np.lexsort((ri.ravel(), li.ravel(), reach.ravel(), np.round(asym.ravel(), 6)))
+    return [(int(li.ravel()[q]), int(ri.ravel()[q])) for q in order[: max(int(k), 1)]]
+
+
 def find_starting_vertices(
     points: np.ndarray, pose: Pose, radius_m: float
 ) -> tuple[int, int] | None:
@@ -333,21 +356,8 @@ def find_starting_vertices(
     at a positive angle from the heading, the right one at a negative angle. Of all pairs, the
     one most symmetric about the car's line wins: the mirror image of the left cone across that
     line is nearest the right cone. Ties go to the pair nearest the car, then to the lower
-    indices. ``None`` when a side has no
-    candidate.
+    indices. ``None`` when a side has no candidate. ``starting_vertex_pairs`` gives the
+    runners-up too.
     """
-    near = np.flatnonzero(near_car_mask(points, pose, radius_m))
-    if near.size < 2:
-        return None
-    local = pose.to_local(points[near])
-    lefts, rights = near[local[:, 1] > 0], near[local[:, 1] < 0]
-    if lefts.size == 0 or rights.size == 0:
-        return None
-    ll, rl = local[local[:, 1] > 0], local[local[:, 1] < 0]
-    asym = np.hypot(ll[:, None, 0] - rl[None, :, 0], ll[:, None, 1] + rl[None, :, 1])
-    reach = np.hypot(ll[:, 0], ll[:, 1])[:, None] + np.hypot(rl[:, 0], rl[:, 1])[None, :]
-    li, ri = np.meshgrid(lefts, rights, indexing="ij")
-    # Most symmetric first; among equals (to a micrometre) the pair nearest the car, then the
-    # lowest indices, so the choice does not depend on the order of the input.
-    k = np.lexsort((ri.ravel(), li.ravel(), reach.ravel(), np.round(asym.ravel(), 6)))[0]
-    return int(li.ravel()[k]), int(ri.ravel()[k])
+    pairs = starting_vertex_pairs(points, pose, radius_m, 1)
+    return pairs[0] if pairs else None

@@ -108,3 +108,21 @@ def test_solver_is_reusable_and_deterministic(method):
         np.testing.assert_array_equal(perm[lane.left], first.left)
         np.testing.assert_array_equal(perm[lane.right], first.right)
     assert solver.previous is lane
+
+
+def test_clc_tries_the_runner_up_start_pair_when_the_best_leads_nowhere():
+    # A straight, right cones staggered by half a spacing; a false positive 0.36 m from the car
+    # pairs with the first left cone a hair more symmetrically (1.71 against 1.75 m) than the
+    # true first right cone does, but that pair is 2.3 m wide, under min_width_m.
+    xs = np.arange(8) * 3.5
+    left = np.column_stack([xs, np.full(8, 2.0)])
+    right = np.column_stack([xs + 1.75, np.full(8, -2.0)])
+    cones = np.vstack([left, right, [[0.2, -0.3]]])
+    pose = Pose(0.0, 0.0, 0.0)
+    lane = solve_lane(cones, pose, method="clc", params=LaneParams(start_pairs=1))
+    assert lane.status == LaneStatus.NOT_FOUND
+    lane = solve_lane(cones, pose, method="clc")
+    assert lane.ok and lane.stats["start_fallbacks"] == 1
+    assert lane.left.tolist() == list(range(8)) and lane.right.tolist() == list(range(8, 16))
+    with pytest.raises(ValueError, match="start_pairs"):
+        LaneParams(start_pairs=0)

@@ -440,3 +440,12 @@ def test_find_starting_vertices():
     assert C.find_starting_vertices(pts[[0, 2]], CAR, 4.5) is None
     # Far from every cone.
     assert C.find_starting_vertices(pts, Pose(100, 100, 0), 4.5) is None
+
+
+def test_starting_vertex_pairs_hand_worked():
+    pts = np.array([[1, 2], [1, -2], [0.5, 2.5], [3, -1.5], [30, 0]], float)
+    # Asymmetry |mirror(left) - right|: (0, 1) 0, (2, 1) 0.71, (0, 3) 2.06, (2, 3) 2.69.
+    assert C.starting_vertex_pairs(pts, CAR, 4.5, 3) == [(0, 1), (2, 1), (0, 3)]
+    assert C.starting_vertex_pairs(pts, CAR, 4.5, 10) == [(0, 1), (2, 1), (0, 3), (2, 3)]
+    assert C.starting_vertex_pairs(pts, CAR, 4.5) == [C.find_starting_vertices(pts, CAR, 4.5)]
+    assert C.starting_vertex_pairs(pts[[0, 2]], CAR, 4.5, 3) == []
