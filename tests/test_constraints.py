@@ -73,12 +73,17 @@ def test_width_conflict_needs_interior_closeness():
     assert C.width_conflicts(pts, np.array([[0, 1], [1, 2]]), 2.5).shape == (0, 2)
 
 
-def _brute_pairs(pts, edges, predicate):
+def _brute_pairs(pts, edges, predicate, other=None):
+    """Pairs e < f within ``edges``, or (e, f) of ``edges`` x ``other``, sharing no cone and
+    satisfying ``predicate``, by enumeration."""
+    pairs = (itertools.combinations(range(len(edges)), 2) if other is None
+             else itertools.product(range(len(edges)), range(len(other))))
+    second = edges if other is None else other
     out = []
-    for e, f in itertools.combinations(range(len(edges)), 2):
-        if set(edges[e].tolist()) & set(edges[f].tolist()):
+    for e, f in pairs:
+        if set(edges[e].tolist()) & set(second[f].tolist()):
             continue
-        if predicate(pts[edges[e]], pts[edges[f]]):
+        if predicate(pts[edges[e]], pts[second[f]]):
             out.append([e, f])
     return out
 
@@ -100,16 +105,6 @@ def test_width_conflicts_and_crossings_match_brute_force(seed, n):
     assert C.crossing_edge_pairs(pts, edges).tolist() == _brute_pairs(pts, edges, crossing)
 
 
-def _brute_cross_pairs(pts, edges, other, predicate):
-    out = []
-    for e, f in itertools.product(range(len(edges)), range(len(other))):
-        if set(edges[e].tolist()) & set(other[f].tolist()):
-            continue
-        if predicate(pts[edges[e]], pts[other[f]]):
-            out.append([e, f])
-    return out
-
-
 @settings(max_examples=40)
 @given(st.integers(0, 10_000), st.integers(4, 25), st.integers(1, 5))
 def test_pairs_across_two_edge_sets_match_brute_force(seed, n, short):
@@ -129,8 +124,8 @@ def test_pairs_across_two_edge_sets_match_brute_force(seed, n, short):
     def crossing(x, y):
         return LineString(x).intersects(LineString(y))
 
-    assert C.width_conflicts(pts, a, 2.5, b).tolist() == _brute_cross_pairs(pts, a, b, narrow)
-    assert C.crossing_edge_pairs(pts, a, b).tolist() == _brute_cross_pairs(pts, a, b, crossing)
+    assert C.width_conflicts(pts, a, 2.5, b).tolist() == _brute_pairs(pts, a, narrow, b)
+    assert C.crossing_edge_pairs(pts, a, b).tolist() == _brute_pairs(pts, a, crossing, b)
 
 
 # --- edges blocked by a fixed part of the lane (the incremental frontier) ---------------------
