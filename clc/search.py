@@ -27,8 +27,7 @@ from rld.costs import ranking_features
 from rld.types import LaneParams, Pose
 
 __all__ = ["SearchGraph", "SearchResult", "CandidateList", "closable", "merge_results",
-           "search_graph",
-           "enumerate_candidates", "GRAPHS"]
+           "search_graph", "enumerate_candidates", "contested_dives", "GRAPHS"]
 
 #: Search-graph constructions: ``radius`` (IV-A, the paper's choice) and ``delaunay`` (IV-B).
 GRAPHS = ("radius", "delaunay")
@@ -146,6 +145,7 @@ def enumerate_candidates(
     start: tuple[int, int] | None = None,
     guide: tuple[np.ndarray, np.ndarray] | None = None,
     close_loops: bool = False,
+    banned: np.ndarray | None = None,
 ) -> SearchResult:
     """CLC Alg. 1 up to the ranking: graph, start vertices, Alg. 2, closings.
 
@@ -153,7 +153,8 @@ def enumerate_candidates(
     ``params.max_iterations``; 0: no limit); ``start``: force the start vertices;
     ``guide``: the warm-start lane (left, right index arrays in ``points``), followed first.
     ``close_loops``: add the closing of every closable candidate (IV-E) as a further candidate;
-    ``clc.solver`` closes only the ranked winner instead (see there).
+    ``clc.solver`` closes only the ranked winner instead (see there). ``banned``: cones no path
+    may take (indices into ``points``; ``contested_dives``).
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
     g = graph if isinstance(graph, SearchGraph) else search_graph(points, params, graph)
@@ -168,7 +169,8 @@ def enumerate_candidates(
         float(np.cos(pose.yaw)), float(np.sin(pose.yaw)), float(params.max_turn_angle_rad),
         float(params.min_width_m), float(params.max_width_m), float(params.nvd_distance_weight),
         float(params.nvd_lookahead_weight), int(it_max), np.ascontiguousarray(gl, dtype=np.int64),
-        np.ascontiguousarray(gr, dtype=np.int64))
+        np.ascontiguousarray(gr, dtype=np.int64),
+        np.zeros(0, np.int64) if banned is None else np.ascontiguousarray(banned, dtype=np.int64))
     cands = CandidateList(lf, lp, rf, rp)
     features = feats
     if close_loops:
@@ -185,6 +187,35 @@ def enumerate_candidates(
                                             for a, b in extra])
     return SearchResult(candidates=cands, features=features, iterations=int(iterations),
                         complete=bool(complete), start=(int(start[0]), int(start[1])), graph=g)
+
+
+def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
+                    start: tuple[int, int], left: np.ndarray, right: np.ndarray,
+                    margin: float, reach_m: float, iterations: int) -> list[SearchResult]:
+    """Searches that revisit the close calls of a lane found under the iteration limit (our
+    addition, docs/clc.md). The depth-first search changes a choice near the car only after
+    it has exhausted everything beyond it, which under it_max it never does. For every
+    position j of ``left`` or ``right`` within ``reach_m`` of its start where the next-vertex
+    decider's runner-up scored at most ``margin`` above the cone taken
+    (``search_kernels.contested_positions``), one more search of ``iterations`` follows the
+    lane up to j (the guide) with that cone banned, so it takes the runner-up there and
+    continues on its own. Returns one result per dive, in order (left first)."""
+    out = []
+    hx, hy = float(np.cos(pose.yaw)), float(np.sin(pose.yaw))
+    left = np.ascontiguousarray(left, dtype=np.int64)
+    right = np.ascontiguousarray(right, dtype=np.int64)
+    for side, path, other in ((0, left, right), (1, right, left)):
+        pos = sk.contested_positions(points, graph.indptr, graph.indices, path, other, hx, hy,
+                                     float(params.max_turn_angle_rad),
+                                     float(params.nvd_distance_weight),
+                                     float(params.nvd_lookahead_weight), float(margin),
+                                     float(reach_m))
+        for j in pos:
+            guide = (left[:j], right) if side == 0 else (left, right[:j])
+            out.append(enumerate_candidates(points, pose, params, max_iterations=iterations,
+                                            graph=graph, start=start, guide=guide,
+                                            banned=path[j:j + 1]))
+    return out
 
 
 def merge_results(a: SearchResult, b: SearchResult) -> SearchResult:

@@ -96,15 +96,35 @@ def _onward(pts, adj_ptr, adj_idx, c, v, in_path, max_turn, dist_weight, dead_en
 
 
 @njit(cache=True)
+def _option_score(pts, adj_ptr, adj_idx, path, n, v, in_path, max_turn, hx, hy, dist_weight,
+                  lookahead, dead_end):
+    """The next-vertex decider's score of extending ``path[:n]`` by ``v`` (CLC eq. 3 with a
+    distance term): |turn| + dist_weight * distance, plus ``lookahead`` times the best such
+    score of the step after it (``_onward``, ``dead_end`` when there is no step after it; 0:
+    none, the one-step decider). The turn of a one-vertex path is taken from the car heading.
+    ``inf`` when the turn exceeds ``max_turn`` (C_seg)."""
+    c = path[n - 1]
+    if n >= 2:
+        p = path[n - 2]
+        a = abs(turn_angle(pts[p, 0], pts[p, 1], pts[c, 0], pts[c, 1], pts[v, 0], pts[v, 1]))
+        if a > max_turn:
+            return np.inf
+    else:
+        a = _angle_between(hx, hy, pts[v, 0] - pts[c, 0], pts[v, 1] - pts[c, 1])
+    score = a + dist_weight * math.hypot(pts[v, 0] - pts[c, 0], pts[v, 1] - pts[c, 1])
+    if lookahead > 0.0:
+        score += lookahead * _onward(pts, adj_ptr, adj_idx, c, v, in_path, max_turn,
+                                     dist_weight, dead_end)
+    return score
+
+
+@njit(cache=True)
 def _choose_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx, hy,
                    dist_weight, lookahead, dead_end, guide, guided):
-    """The next-vertex decider (CLC eq. 3, with a distance term): among the neighbours of the
-    path's end that are untried at this frame, in no path and within the turn limit (C_seg),
-    the one minimising |turn| + dist_weight * distance, plus ``lookahead`` times the best such
-    score of the step after it (``_onward``, ``dead_end`` when there is no step after it; 0:
-    none, the one-step decider). The warm-start
-    guide's next vertex wins when the path is still a prefix of the guide. Returns (slot,
-    vertex) or (-1, -1)."""
+    """The next-vertex decider: among the neighbours of the path's end that are untried at
+    this frame, in no path and within the turn limit (C_seg), the one with the lowest
+    ``_option_score``. The warm-start guide's next vertex wins when the path is still a
+    prefix of the guide. Returns (slot, vertex) or (-1, -1)."""
     c = path[n - 1]
     s0 = adj_ptr[c]
     best = -1
@@ -119,25 +139,71 @@ def _choose_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx,
         v = adj_idx[s0 + k]
         if in_path[v]:
             continue
-        if n >= 2:
-            p = path[n - 2]
-            t = turn_angle(pts[p, 0], pts[p, 1], pts[c, 0], pts[c, 1], pts[v, 0], pts[v, 1])
-            if abs(t) > max_turn:
-                continue
-            a = abs(t)
-        else:
-            a = _angle_between(hx, hy, pts[v, 0] - pts[c, 0], pts[v, 1] - pts[c, 1])
+        score = _option_score(pts, adj_ptr, adj_idx, path, n, v, in_path, max_turn, hx, hy,
+                              dist_weight, lookahead, dead_end)
+        if score == np.inf:
+            continue
         if v == want:
             return k, v
-        score = a + dist_weight * math.hypot(pts[v, 0] - pts[c, 0], pts[v, 1] - pts[c, 1])
-        if lookahead > 0.0:
-            score += lookahead * _onward(pts, adj_ptr, adj_idx, c, v, in_path, max_turn,
-                                         dist_weight, dead_end)
         if score < best_score:
             best_score = score
             best = k
             best_v = v
     return best, best_v
+
+
+@njit(cache=True)
+def dead_end_score(pts, adj_ptr, adj_idx, max_turn, dist_weight):
+    """The look-ahead's score of a cone with no step onward: the worst step the graph holds,
+    phi_max + dist_weight * its longest edge."""
+    longest = 0.0
+    for v in range(pts.shape[0]):
+        for s in range(adj_ptr[v], adj_ptr[v + 1]):
+            w = adj_idx[s]
+            d = math.hypot(pts[w, 0] - pts[v, 0], pts[w, 1] - pts[v, 1])
+            if d > longest:
+                longest = d
+    return max_turn + dist_weight * longest
+
+
+@njit(cache=True)
+def contested_positions(pts, adj_ptr, adj_idx, path, other, hx, hy, max_turn, dist_weight,
+                        lookahead, margin, reach):
+    """Positions j >= 1 of ``path`` (one boundary of a lane, ``other`` the other one) within
+    ``reach`` metres of path length from its start at which the next-vertex decider had a
+    close second: another option of path[:j] (not in either boundary, within the turn limit)
+    whose ``_option_score`` is at most ``margin`` above that of path[j]. Returns the
+    positions in order."""
+    N = pts.shape[0]
+    dead_end = dead_end_score(pts, adj_ptr, adj_idx, max_turn, dist_weight)
+    in_path = np.zeros(N, dtype=np.bool_)
+    for v in other:
+        in_path[v] = True
+    out = np.empty(path.shape[0], dtype=np.int64)
+    m = 0
+    arc = 0.0
+    for j in range(1, path.shape[0]):
+        arc += math.hypot(pts[path[j], 0] - pts[path[j - 1], 0],
+                          pts[path[j], 1] - pts[path[j - 1], 1])
+        if arc > reach:
+            break
+        in_path[path[j - 1]] = True
+        c = path[j - 1]
+        chosen = _option_score(pts, adj_ptr, adj_idx, path, j, path[j], in_path, max_turn, hx,
+                               hy, dist_weight, lookahead, dead_end)
+        second = np.inf
+        for s in range(adj_ptr[c], adj_ptr[c + 1]):
+            v = adj_idx[s]
+            if v == path[j] or in_path[v]:
+                continue
+            sc = _option_score(pts, adj_ptr, adj_idx, path, j, v, in_path, max_turn, hx, hy,
+                               dist_weight, lookahead, dead_end)
+            if sc < second:
+                second = sc
+        if second < np.inf and second - chosen <= margin:
+            out[m] = j
+            m += 1
+    return out[:m]
 
 
 @njit(cache=True)
@@ -524,7 +590,7 @@ def _grow_rows(a, need):
 
 @njit(cache=True)
 def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, wmin, wmax,
-                    dist_weight, lookahead, max_iterations, guide_l, guide_r):
+                    dist_weight, lookahead, max_iterations, guide_l, guide_r, banned):
     """CLC Alg. 2: enumerate the path pairs from (start_l, start_r) that satisfy CD (eq. 6).
 
     ``pts`` (N, 2) float64 metres; ``adj_ptr`` (N+1,), ``adj_idx`` the search graph in CSR form
@@ -533,7 +599,8 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     ``lookahead`` the weight of the NVD's look-ahead step (0: none; a cone with no step
     onward scores as the worst step the graph holds, phi_max + dist_weight * longest edge);
     ``max_iterations`` it_max (<= 0: no limit); ``guide_l``, ``guide_r`` the warm-start paths
-    (may be empty) the search follows first.
+    (may be empty) the search follows first; ``banned`` vertices (may be empty) are in no
+    path (the contested-choice dives of ``clc.solver``).
 
     Returns ``(left_flat, left_ptr, right_flat, right_ptr, features, iterations, complete)``:
     candidate k's left boundary is ``left_flat[left_ptr[k]:left_ptr[k+1]]`` (likewise right),
@@ -542,14 +609,7 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     options before the limit.
     """
     N = pts.shape[0]
-    longest = 0.0
-    for v in range(N):
-        for s in range(adj_ptr[v], adj_ptr[v + 1]):
-            w = adj_idx[s]
-            d = math.hypot(pts[w, 0] - pts[v, 0], pts[w, 1] - pts[v, 1])
-            if d > longest:
-                longest = d
-    dead_end = max_turn + dist_weight * longest
+    dead_end = dead_end_score(pts, adj_ptr, adj_idx, max_turn, dist_weight)
     maxdeg = 1
     for v in range(N):
         d = adj_ptr[v + 1] - adj_ptr[v]
@@ -562,6 +622,8 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     R[0] = start_r
     nL = 1
     nR = 1
+    for v in banned:
+        in_path[v] = True
     in_path[start_l] = True
     in_path[start_r] = True
     # Per frame (depth): tried options of each side's end, the side that made the frame,

@@ -31,7 +31,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from clc.ranker import get_ranker
-from clc.search import GRAPHS, closable, enumerate_candidates, merge_results
+from clc.search import GRAPHS, closable, contested_dives, enumerate_candidates, merge_results
 from rld.constraints import lane_is_feasible, starting_vertex_pairs
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
@@ -40,6 +40,11 @@ __all__ = ["ClcModel", "MATCH_TOLERANCE_M"]
 log = logging.getLogger(__name__)
 
 MATCH_TOLERANCE_M = 0.5
+#: The contested-choice dives (``clc.search.contested_dives``, ``LaneParams.contested_margin``):
+#: the iterations of each, and how far along each boundary of the ranked lane (metres of path
+#: from its start) a close call is revisited; the critical distance of the protocol is 20 m.
+DIVE_ITERATIONS = 40
+DIVE_REACH_M = 25.0
 
 
 def _match(prev_xy: np.ndarray, tree: cKDTree) -> np.ndarray:
@@ -156,6 +161,24 @@ class ClcModel:
         best = int(np.argmax(scores))  # ties: the first found
         left, right, closed = res.candidates[best]
         left, right = left.copy(), right.copy()
+        score = float(scores[best])
+        dives = []
+        if not res.complete and self.params.contested_margin > 0:
+            dives = contested_dives(points, pose, self.params, res.graph, res.start, left,
+                                    right, self.params.contested_margin, DIVE_REACH_M,
+                                    DIVE_ITERATIONS)
+        for dive in dives:
+            iterations += dive.iterations
+            if not dive.candidates:
+                continue
+            s = np.asarray(self.ranker.score(points, pose, self.params, dive.candidates,
+                                             dive.features), dtype=np.float64)
+            k = int(np.argmax(s))
+            if s[k] > score:  # ties: the first search's lane stays
+                left, right, closed = (a.copy() if isinstance(a, np.ndarray) else a
+                                       for a in dive.candidates[k])
+                score = float(s[k])
+        stats.update(dives=len(dives), iterations=iterations)
         if not closed and closable(res.graph, left, right):
             closed = lane_is_feasible(points[left], points[right], self.params, closed=True)
         self._prev = (points[left].copy(), points[right].copy())
@@ -165,5 +188,8 @@ class ClcModel:
         status = LaneStatus.OPTIMAL if res.complete else LaneStatus.FEASIBLE
         message = ("every feasible path pair was enumerated" if res.complete else
                    f"the search stopped at it_max = {self.params.max_iterations} iterations")
+        if fallbacks:
+            message += (f"; from start pair {fallbacks + 1} by symmetry (the better ones had "
+                        "no feasible path pair)")
         return Lane(cones=points, left=left, right=right, status=status, message=message,
-                    cost=float(scores[best]), closed=bool(closed), stats=stats)
+                    cost=score, closed=bool(closed), stats=stats)

@@ -102,7 +102,8 @@ def as_cones(cones: Any, min_cones: int = MIN_CONES) -> np.ndarray:
 
 
 #: LaneParams fields for which 0 is meaningful.
-_MAY_BE_ZERO = ("window_behind_m", "nvd_distance_weight", "nvd_lookahead_weight")
+_MAY_BE_ZERO = ("window_behind_m", "nvd_distance_weight", "nvd_lookahead_weight",
+                "contested_margin")
 
 
 @dataclass(frozen=True)
@@ -203,6 +204,18 @@ class LaneParams:
     1.6 (4.9) / 3.5 (10.7) / 7.7 (15.9) / 20.2 (34.4) with 0.75 at 0 / 10 / 30 / 50 % false
     positives; R = 30 m 9.3 / 15.7 / 23.6 / 42.1 -> 7.6 / 12.7 / 20.5 / 30.1. 0.5 and 1.0 were
     worse at 10 and 30 %, 1.5 and 2.0 worse everywhere."""
+    contested_margin: float = 0.2
+    """CLC's contested-choice dives (our addition, ``clc.search.contested_dives``): when the
+    search stopped at it_max, every choice of the ranked lane within 25 m of its start whose
+    runner-up scored at most this much higher in the next-vertex decider (the score's units,
+    radians) is revisited by a 40-iteration search that takes the runner-up; the ranker then
+    picks among all. 0: no dives. Measured 2026-12-01 on the six shared tracks (every pose,
+    learned ranker, tolerant critical %, strict in brackets): R = 50 m 0 -> 0.2 gave 1.60
+    (4.88) / 3.13 (10.33) / 7.28 (15.50) / 19.80 (34.21) -> 1.16 (4.88) / 2.62 (10.26) / 6.70
+    (15.43) / 16.01 (32.39) at 0 / 10 / 30 / 50 % false positives, 0.1-0.6 dives per call;
+    R = 30 m mixed, 7.64 / 12.66 / 20.45 / 29.84 -> 7.13 / 13.10 / 16.52 / 31.80. 0.15 gave
+    the same as 0.2 at R = 50 m but 16.38 at 50 %, 0.3 gained less at 30 % (7.06); in a
+    prototype 0.8 was worse at 0 % (2.0 against 1.7, every 2nd pose)."""
     start_pairs: int = 4
     """How many start pairs CLC tries, most symmetric first (IV-C), when a pair has no feasible
     path pair: the search runs from the next one instead of returning no lane (our addition;

@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from clc import search_kernels as sk
-from clc.search import closable, enumerate_candidates, search_graph
+from clc.search import closable, contested_dives, enumerate_candidates, search_graph
 from rld import LaneParams, LaneSolver, LaneStatus, Pose, solve_lane
 from rld.constraints import c_seg, find_starting_vertices, lane_is_feasible
 from rld.costs import ranking_features
@@ -110,6 +110,51 @@ def test_enumeration_is_complete_under_other_limits(seed, n, turn, wmin, wmax, l
         return
     res = enumerate_candidates(pts, POSE, params, max_iterations=0)
     assert as_set(res) == brute_force(pts, params, start)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(6, 9), pick=st.integers(0, 100))
+def test_banned_cones_are_the_same_as_removed_ones(seed, n, pick):
+    """``banned``: with no limit, exactly the candidates of the map without those cones (brute
+    force on the reduced map, indices mapped back)."""
+    pts = lane_instance(seed, n)
+    start = find_starting_vertices(pts, POSE, PARAMS.near_radius_m)
+    if start is None:
+        return
+    others = [v for v in range(n) if v not in start]
+    ban = others[pick % len(others)]
+    keep = np.array([v for v in range(n) if v != ban])
+    inv = {int(v): k for k, v in enumerate(keep)}
+    res = enumerate_candidates(pts, POSE, PARAMS, max_iterations=0, start=start,
+                               banned=np.array([ban]))
+    reduced = brute_force(pts[keep], PARAMS, (inv[start[0]], inv[start[1]]))
+    mapped = {(tuple(int(keep[i]) for i in a), tuple(int(keep[i]) for i in b))
+              for a, b in reduced}
+    assert as_set(res) == mapped
+    assert all(ban not in a and ban not in b for a, b, _ in res.candidates)
+
+
+def test_contested_positions_hand_worked():
+    """A straight left boundary with one cone 0.15 m off the line beside its third cone: the
+    decider's choice at position 2 has a close second (the off-line cone), nowhere else."""
+    xs = np.arange(6) * 3.5
+    left = np.column_stack([xs, np.full(6, 1.75)])
+    right = np.column_stack([xs, np.full(6, -1.75)])
+    pts = np.vstack([left, right, [[7.0, 1.9]]])
+    g = search_graph(pts, PARAMS)
+    L, R = np.arange(6), np.arange(6, 12)
+
+    def positions(margin, reach=100.0, path=L, other=R):
+        return sk.contested_positions(pts, g.indptr, g.indices, path, other, 1.0, 0.0,
+                                      PARAMS.max_turn_angle_rad, PARAMS.nvd_distance_weight,
+                                      PARAMS.nvd_lookahead_weight, margin, reach).tolist()
+
+    assert positions(0.2) == [2]
+    assert positions(0.0) == []  # the on-line cone scores strictly better
+    assert positions(0.2, reach=5.0) == []  # position 2 lies 7 m along the path
+    assert positions(0.2, path=R, other=L) == []  # the right side has no close call
+    # The decider's own score decides: a larger margin admits the next-but-one cones too.
+    assert len(positions(5.0)) > 1
 
 
 @settings(max_examples=30, deadline=None)
@@ -212,9 +257,18 @@ def test_no_start_cone_is_not_found():
 
 
 def test_too_narrow_start_is_not_found():
-    pts = np.array([[0.0, 0.5], [3.0, 0.5], [0.0, -0.5], [3.0, -0.5]])
+    # Every left-right pair is narrower than min_width_m (2.5 m).
+    pts = np.array([[0.0, 0.5], [1.0, 0.5], [0.0, -0.5], [1.0, -0.5]])
     lane = solve_lane(pts, (0.0, 0.0, 0.0), method="clc", ranker="longest")
     assert not lane.ok and lane.status is LaneStatus.NOT_FOUND
+    # With the paper's single start pair the most symmetric one decides, even when a wider
+    # runner-up exists (here (0, 0.5) with (3, -0.5), 3.2 m apart).
+    pts = np.array([[0.0, 0.5], [3.0, 0.5], [0.0, -0.5], [3.0, -0.5]])
+    lane = solve_lane(pts, (0.0, 0.0, 0.0), method="clc", ranker="longest",
+                      params=LaneParams(start_pairs=1))
+    assert not lane.ok and lane.status is LaneStatus.NOT_FOUND
+    lane = solve_lane(pts, (0.0, 0.0, 0.0), method="clc", ranker="longest")
+    assert lane.ok and lane.stats["start_fallbacks"] >= 1 and "start pair" in lane.message
 
 
 def test_warm_start_follows_the_previous_lane():
@@ -267,3 +321,27 @@ def test_clc_rejects_a_backend_and_others_reject_a_ranker():
         LaneSolver(method="clc", backend="cpsat")
     with pytest.raises(ValueError, match="takes no ranker"):
         solve_lane(pts, POSE, method="rld", ranker="longest")
+
+
+def test_contested_dives_take_the_runner_up_and_the_ranker_decides():
+    xs = np.arange(6) * 3.5
+    left = np.column_stack([xs, np.full(6, 1.75)])
+    right = np.column_stack([xs, np.full(6, -1.75)])
+    pts = np.vstack([left, right, [[7.0, 1.9]]])
+    params = LaneParams(max_iterations=30)  # the search stops early: the dives run
+    g = search_graph(pts, params)
+    L, R = np.arange(6), np.arange(6, 12)
+    dives = contested_dives(pts, POSE, params, g, (0, 6), L, R, 0.2, 25.0, 40)
+    assert len(dives) == 1
+    cands = list(dives[0].candidates)
+    assert cands and all(2 not in a and 2 not in b for a, b, _ in cands)
+    # The dive followed the lane up to the close call, then took the runner-up (cone 12).
+    assert any(a[:3].tolist() == [0, 1, 12] for a, _, _ in cands)
+    for a, b, _ in cands:
+        assert lane_is_feasible(pts[a], pts[b], params)
+    # Through the solver: the dive ran, and the ranker kept the straight lane.
+    lane = LaneSolver("clc", params, ranker="rld_cost").solve(pts, POSE)
+    assert lane.stats["dives"] == 1 and lane.left.tolist() == list(range(6))
+    off = LaneSolver("clc", LaneParams(max_iterations=30, contested_margin=0.0),
+                     ranker="rld_cost").solve(pts, POSE)
+    assert off.stats["dives"] == 0 and off.left.tolist() == lane.left.tolist()
