@@ -33,6 +33,7 @@ from scipy.spatial import cKDTree
 from clc.ranker import get_ranker
 from clc.search import GRAPHS, closable, contested_dives, enumerate_candidates, merge_results
 from rld.constraints import lane_is_feasible, starting_vertex_pairs
+from rld.costs import lane_cost
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
 __all__ = ["ClcModel", "MATCH_TOLERANCE_M"]
@@ -41,8 +42,9 @@ log = logging.getLogger(__name__)
 
 MATCH_TOLERANCE_M = 0.5
 #: The contested-choice dives (``clc.search.contested_dives``, ``LaneParams.contested_margin``):
-#: the iterations of each, and how far along each boundary of the ranked lane (metres of path
-#: from its start) a close call is revisited; the critical distance of the protocol is 20 m.
+#: the iterations of each beyond rebuilding the lane it follows, and how far along each
+#: boundary of the ranked lane (metres of path from its start) a close call is revisited; the
+#: critical distance of the protocol is 20 m.
 DIVE_ITERATIONS = 40
 DIVE_REACH_M = 25.0
 
@@ -164,9 +166,15 @@ class ClcModel:
         score = float(scores[best])
         dives = []
         if not res.complete and self.params.contested_margin > 0:
+            # Each dive first rebuilds the lane it follows (one iteration per guided cone),
+            # then has DIVE_ITERATIONS of its own.
             dives = contested_dives(points, pose, self.params, res.graph, res.start, left,
                                     right, self.params.contested_margin, DIVE_REACH_M,
-                                    DIVE_ITERATIONS)
+                                    DIVE_ITERATIONS + left.size + right.size)
+        # The ranker's pick of every dive is a finalist beside the first search's winner; they
+        # differ from it at a close call and are about as long, so the ranker's features barely
+        # tell them apart. RLD's objective (the shared lane_cost, eq. 29) decides among them.
+        finalists = [(left, right, closed, score)]
         for dive in dives:
             iterations += dive.iterations
             if not dive.candidates:
@@ -174,10 +182,12 @@ class ClcModel:
             s = np.asarray(self.ranker.score(points, pose, self.params, dive.candidates,
                                              dive.features), dtype=np.float64)
             k = int(np.argmax(s))
-            if s[k] > score:  # ties: the first search's lane stays
-                left, right, closed = (a.copy() if isinstance(a, np.ndarray) else a
-                                       for a in dive.candidates[k])
-                score = float(s[k])
+            a, b, c = dive.candidates[k]
+            finalists.append((a.copy(), b.copy(), c, float(s[k])))
+        if len(finalists) > 1:
+            costs = [lane_cost(points, a, b, pose, self.params, closed=c)
+                     for a, b, c, _ in finalists]
+            left, right, closed, score = finalists[int(np.argmin(costs))]  # ties: the first
         stats.update(dives=len(dives), iterations=iterations)
         if not closed and closable(res.graph, left, right):
             closed = lane_is_feasible(points[left], points[right], self.params, closed=True)

@@ -208,14 +208,18 @@ class LaneParams:
     """CLC's contested-choice dives (our addition, ``clc.search.contested_dives``): when the
     search stopped at it_max, every choice of the ranked lane within 25 m of its start whose
     runner-up scored at most this much higher in the next-vertex decider (the score's units,
-    radians) is revisited by a 40-iteration search that takes the runner-up; the ranker then
-    picks among all. 0: no dives. Measured 2026-12-01 on the six shared tracks (every pose,
-    learned ranker, tolerant critical %, strict in brackets): R = 50 m 0 -> 0.2 gave 1.60
-    (4.88) / 3.13 (10.33) / 7.28 (15.50) / 19.80 (34.21) -> 1.16 (4.88) / 2.62 (10.26) / 6.70
-    (15.43) / 16.01 (32.39) at 0 / 10 / 30 / 50 % false positives, 0.1-0.6 dives per call;
-    R = 30 m mixed, 7.64 / 12.66 / 20.45 / 29.84 -> 7.13 / 13.10 / 16.52 / 31.80. 0.15 gave
-    the same as 0.2 at R = 50 m but 16.38 at 50 %, 0.3 gained less at 30 % (7.06); in a
-    prototype 0.8 was worse at 0 % (2.0 against 1.7, every 2nd pose)."""
+    radians) is revisited by a search that follows the lane up to there, takes the runner-up and
+    has 40 iterations beyond rebuilding the lane; the ranker's pick of each dive and of the
+    first search are the finalists, and RLD's objective (``rld.costs.lane_cost``) picks among
+    them. 0: no dives. Measured 2026-12-01 on the six shared tracks (every pose, learned
+    ranker, tolerant critical %, strict in brackets): R = 50 m 0 -> 0.2 gave 1.60 (4.88) /
+    3.13 (10.33) / 7.28 (15.50) / 19.80 (34.21) -> 1.16 (4.88) / 1.38 (7.71) / 4.15 (11.21) /
+    12.45 (27.51) at 0 / 10 / 30 / 50 % false positives; R = 30 m 7.64 / 12.66 / 20.45 / 29.84
+    -> 6.99 / 10.70 / 11.64 / 25.69. 0.1 gave 1.60 / 1.82 / 4.22 / 14.99 and 0.4 1.97 / 2.47 /
+    6.11 / 15.94 at R = 50 m. The learned ranker alone as the judge of the finalists gave 3.86 /
+    4.22 / 5.46 / 12.15 (it cannot tell lanes that differ at one cone apart); dives of 40
+    iterations in all (too short to rebuild a long lane, so they won only on short maps) 1.16 /
+    2.62 / 6.70 / 16.01."""
     start_pairs: int = 4
     """How many start pairs CLC tries, most symmetric first (IV-C), when a pair has no feasible
     path pair: the search runs from the next one instead of returning no lane (our addition;

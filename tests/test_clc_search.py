@@ -345,3 +345,25 @@ def test_contested_dives_take_the_runner_up_and_the_ranker_decides():
     off = LaneSolver("clc", LaneParams(max_iterations=30, contested_margin=0.0),
                      ranker="rld_cost").solve(pts, POSE)
     assert off.stats["dives"] == 0 and off.left.tolist() == lane.left.tolist()
+    # The finalists are the ranker's pick of the first search and of each dive; RLD's objective
+    # decides among them, whatever the ranker.
+    from clc.ranker import get_ranker
+    from rld.costs import lane_cost
+    for name in ("longest", "learned"):
+        ranker = get_ranker(name)
+        first = enumerate_candidates(pts, POSE, params)
+        picks = []
+        for res in [first] + contested_dives(pts, POSE, params, first.graph, first.start,
+                                             *_pick(ranker, pts, params, first)[:2], 0.2, 25.0,
+                                             40 + 12):
+            picks.append(_pick(ranker, pts, params, res))
+        costs = [lane_cost(pts, a, b, POSE, params) for a, b in picks]
+        got = LaneSolver("clc", params, ranker=name).solve(pts, POSE)
+        assert got.stats["dives"] == len(picks) - 1 >= 1
+        assert lane_cost(pts, got.left, got.right, POSE, params) == pytest.approx(min(costs))
+
+
+def _pick(ranker, pts, params, res):
+    s = ranker.score(pts, POSE, params, res.candidates, res.features)
+    a, b, _ = res.candidates[int(np.argmax(s))]
+    return a, b
