@@ -22,7 +22,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from rld.costs import FEATURE_NAMES, lane_cost
+from rld.costs import FEATURE_NAMES, lane_cost, open_path_costs
 from rld.types import LaneParams, Pose
 
 __all__ = ["Ranker", "LongestRanker", "RldCostRanker", "LearnedRanker", "get_ranker",
@@ -69,8 +69,18 @@ class RldCostRanker:
 
     def score(self, points: np.ndarray | None, pose: Pose | None, params: LaneParams | None,
               candidates: Sequence, features: np.ndarray) -> np.ndarray:
-        return np.array([-lane_cost(points, a, b, pose, params, closed=c)
-                         for a, b, c in candidates], dtype=np.float64)
+        if not hasattr(candidates, "flat"):
+            return np.array([-lane_cost(points, a, b, pose, params, closed=c)
+                             for a, b, c in candidates], dtype=np.float64)
+        # A search's candidate list: all open candidates at once (``open_path_costs``), the
+        # closed ones (if any) one by one.
+        lf, lp, rf, rp, closed = candidates.flat()
+        out = -(open_path_costs(points, lf, lp, pose, params)
+                + open_path_costs(points, rf, rp, pose, params))
+        for k in np.flatnonzero(closed):
+            a, b, c = candidates[int(k)]
+            out[k] = -lane_cost(points, a, b, pose, params, closed=c)
+        return out
 
 
 class LearnedRanker:

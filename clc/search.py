@@ -115,6 +115,12 @@ class CandidateList(Sequence):
         """Cones per left and per right boundary, (K,) each."""
         return np.diff(self._lp), np.diff(self._rp)
 
+    def flat(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The backing arrays, read-only by convention: ``(left_flat, left_ptr, right_flat,
+        right_ptr, closed)``; candidate k's left boundary is
+        ``left_flat[left_ptr[k]:left_ptr[k + 1]]`` (likewise right)."""
+        return self._lf, self._lp, self._rf, self._rp, self._closed
+
 
 @dataclass
 class SearchResult:

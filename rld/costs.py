@@ -21,6 +21,7 @@ __all__ = [
     "high_cost_mask",
     "edge_objective",
     "lane_cost",
+    "open_path_costs",
     "color_cost",
     "confidence_cost",
     "ranking_features",
@@ -146,6 +147,32 @@ def lane_cost(
         turns = geo.polyline_turn_angles(points[idx], closed=closed)
         total += params.w_angle * float(angle_cost(turns, params.angle_tolerance_rad).sum())
     return total
+
+
+def open_path_costs(points: np.ndarray, flat: np.ndarray, ptr: np.ndarray, pose: Pose,
+                    params: LaneParams) -> np.ndarray:
+    """``lane_cost``'s edge and turn terms for many open paths at once: path k is
+    ``flat[ptr[k]:ptr[k + 1]]`` (indices into ``points``); returns (K,) the sum of its edge
+    coefficients (eq. 29, ``edge_objective``) plus ``w_t`` times the angle cost (eq. 20) at its
+    interior cones, 0 for a path of fewer than two cones. ``lane_cost`` of an open lane is the
+    sum of this over its two sides (no colours or confidence); tested equal. CLC's ``rld_cost``
+    ranker scores a whole candidate list with it."""
+    flat = np.asarray(flat, dtype=np.int64)
+    ptr = np.asarray(ptr, dtype=np.int64)
+    out = np.zeros(ptr.size - 1)
+    if flat.size < 2:
+        return out
+    owner = np.repeat(np.arange(ptr.size - 1), np.diff(ptr))
+    same = owner[:-1] == owner[1:]
+    edges = np.column_stack([flat[:-1][same], flat[1:][same]])
+    np.add.at(out, owner[:-1][same], edge_objective(points, edges, pose, params))
+    same3 = owner[:-2] == owner[2:]
+    if same3.any():
+        turns = geo.turn_angles(points[flat[:-2][same3]], points[flat[1:-1][same3]],
+                                points[flat[2:][same3]])
+        np.add.at(out, owner[:-2][same3],
+                  params.w_angle * angle_cost(turns, params.angle_tolerance_rad))
+    return out
 
 
 def ranking_features(left_xy: np.ndarray, right_xy: np.ndarray, closed: bool = False) -> np.ndarray:

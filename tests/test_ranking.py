@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from clc.ranker import (
     DEFAULT_MODEL,
@@ -166,3 +168,23 @@ def test_training_learns_a_monotone_preference():
                       arrays["std"])
     held = top_pick_iou(r, lists[40:])
     assert held["mean_iou_top"] >= held["mean_iou_oracle"] - 0.02
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), fp=st.sampled_from([0.0, 0.3]))
+def test_rld_cost_ranker_on_a_search_list_is_lane_cost_per_candidate(seed, fp):
+    """The vectorised score of a whole candidate list (``open_path_costs``) equals minus the
+    shared ``lane_cost`` of every candidate, closed ones included."""
+    from clc.search import enumerate_candidates
+    from rld.generator import generate_track
+    from rld.simulation import simulate_lap
+
+    lap = simulate_lap(generate_track(seed % 50), range_m=30.0, fp_rate=fp, seed=seed)
+    f = lap.frame(int(seed % len(lap)))
+    params = LaneParams(max_iterations=60)
+    res = enumerate_candidates(f.cones, f.pose, params, close_loops=True)
+    if len(res.candidates) == 0:
+        return
+    got = RldCostRanker().score(f.cones, f.pose, params, res.candidates, res.features)
+    want = [-lane_cost(f.cones, a, b, f.pose, params, closed=c) for a, b, c in res.candidates]
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
