@@ -205,18 +205,16 @@ def truth_in_program(frame: Frame, params: LaneParams) -> float | None:
     optimum); dearer or infeasible, the model's (the optimum is not the true lane)."""
     window, _ = cone_window(frame.points, frame.pose, params)
     program = build_program(frame.points[window], frame.pose, params, no_crossing=True)
-    local = {int(g): k for k, g in enumerate(window)}
-    eid = {(int(i), int(j)): k for k, (i, j) in enumerate(program.edges)}
     chosen = []
     for side in frame.truth:
-        if any(int(c) not in local for c in side):
+        if not np.isin(side, window).all():
             return None
-        for a, b in zip(side[:-1], side[1:], strict=True):
-            key = (min(local[int(a)], local[int(b)]), max(local[int(a)], local[int(b)]))
-            if key not in eid:
-                return None
-            chosen.append(eid[key])
-    x = program.solution_from_edges(np.array(chosen, dtype=np.int64))
+        local = np.searchsorted(window, side)  # the window is sorted
+        ids = program.edge_ids(local[:-1], local[1:])
+        if np.any(ids < 0):
+            return None
+        chosen.append(ids)
+    x = program.solution_from_edges(np.concatenate(chosen))
     return program.objective(x) if program.is_feasible(x) else None
 
 

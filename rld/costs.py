@@ -141,22 +141,27 @@ def lane_cost(
             total += params.w_color * float((colors[idx] == wrong).sum())
         if idx.size < 2:
             continue
-        seq = np.concatenate([idx, idx[:1]]) if closed else idx
+        if not closed:
+            total += float(open_path_costs(points, idx, np.array([0, idx.size]), pose, params,
+                                           colors, heading)[0])
+            continue
+        seq = np.concatenate([idx, idx[:1]])
         edges = np.column_stack([seq[:-1], seq[1:]])
         total += float(edge_objective(points, edges, pose, params, colors, heading).sum())
-        turns = geo.polyline_turn_angles(points[idx], closed=closed)
+        turns = geo.polyline_turn_angles(points[idx], closed=True)
         total += params.w_angle * float(angle_cost(turns, params.angle_tolerance_rad).sum())
     return total
 
 
 def open_path_costs(points: np.ndarray, flat: np.ndarray, ptr: np.ndarray, pose: Pose,
-                    params: LaneParams) -> np.ndarray:
-    """``lane_cost``'s edge and turn terms for many open paths at once: path k is
+                    params: LaneParams, colors: np.ndarray | None = None,
+                    heading: bool = True) -> np.ndarray:
+    """The edge and turn terms of RLD's objective for many open paths at once: path k is
     ``flat[ptr[k]:ptr[k + 1]]`` (indices into ``points``); returns (K,) the sum of its edge
-    coefficients (eq. 29, ``edge_objective``) plus ``w_t`` times the angle cost (eq. 20) at its
-    interior cones, 0 for a path of fewer than two cones. ``lane_cost`` of an open lane is the
-    sum of this over its two sides (no colours or confidence); tested equal. CLC's ``rld_cost``
-    ranker scores a whole candidate list with it."""
+    coefficients (eq. 29, ``edge_objective`` with ``colors`` and ``heading``) plus ``w_t``
+    times the angle cost (eq. 20) at its interior cones, 0 for a path of fewer than two cones.
+    ``lane_cost`` sums it over the sides of an open lane; CLC's ``rld_cost`` ranker scores a
+    whole candidate list with it."""
     flat = np.asarray(flat, dtype=np.int64)
     ptr = np.asarray(ptr, dtype=np.int64)
     out = np.zeros(ptr.size - 1)
@@ -165,7 +170,7 @@ def open_path_costs(points: np.ndarray, flat: np.ndarray, ptr: np.ndarray, pose:
     owner = np.repeat(np.arange(ptr.size - 1), np.diff(ptr))
     same = owner[:-1] == owner[1:]
     edges = np.column_stack([flat[:-1][same], flat[1:][same]])
-    np.add.at(out, owner[:-1][same], edge_objective(points, edges, pose, params))
+    np.add.at(out, owner[:-1][same], edge_objective(points, edges, pose, params, colors, heading))
     same3 = owner[:-2] == owner[2:]
     if same3.any():
         turns = geo.turn_angles(points[flat[:-2][same3]], points[flat[1:-1][same3]],

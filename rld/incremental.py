@@ -294,9 +294,9 @@ class IncrementalRld:
         edges, new = np.vstack(edges), np.concatenate(new)
         fresh, kept = edges[new], edges[~new]
         w = self.params.min_width_m
-        return not any(pairs.shape[0] for pairs in (
-            crossing_edge_pairs(points, fresh), width_conflicts(points, fresh, w),
-            crossing_edge_pairs(points, fresh, kept), width_conflicts(points, fresh, w, kept)))
+        return not (crossing_edge_pairs(points, fresh).shape[0]
+                    or width_conflicts(points, fresh, w).shape[0]
+                    or blocked_by_fixed(points, fresh, kept, w).any())
 
     def _frontier_window(self, points, free, left, right, released=()) -> np.ndarray:
         """The frontier program's cones (indices into ``points``): the two junctions

@@ -110,6 +110,23 @@ class LaneProgram:
         base = side * (E + T + 2 * N)
         return slice(base + starts[name], base + starts[name] + sizes[name])
 
+    def edge_ids(self, a, b) -> np.ndarray:
+        """Index (within block ``a``) of the candidate edge joining cone ``a[i]`` and cone
+        ``b[i]`` (program indices, either order), -1 where the program has no such edge."""
+        a, b = np.asarray(a, dtype=np.int64), np.asarray(b, dtype=np.int64)
+        out = np.full(a.shape, -1, dtype=np.int64)
+        if self.n_edges == 0 or a.size == 0:
+            return out
+        n = self.n_cones
+        keys = self.edges[:, 0] * n + self.edges[:, 1]
+        order = np.argsort(keys, kind="stable")
+        sorted_keys = keys[order]
+        q = np.minimum(a, b) * n + np.maximum(a, b)
+        pos = np.minimum(np.searchsorted(sorted_keys, q), sorted_keys.size - 1)
+        hit = sorted_keys[pos] == q
+        out[hit] = order[pos[hit]]
+        return out
+
     def objective(self, x: np.ndarray) -> float:
         return float(self.c @ x)
 

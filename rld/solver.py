@@ -83,17 +83,14 @@ class RldModel:
         if not self.warm_start or self._previous is None:
             return None, 0
         tree = cKDTree(program.points)
-        eid = {(int(i), int(j)): k for k, (i, j) in enumerate(program.edges)}
         per_side: list[list[int]] = []
         for xy in self._previous:
-            chosen = []
+            chosen: list[int] = []
             if len(xy) >= 2:
                 dist, idx = tree.query(xy, distance_upper_bound=MATCH_TOLERANCE_M)
-                for k in range(len(xy) - 1):
-                    if np.isfinite(dist[k]) and np.isfinite(dist[k + 1]):
-                        key = (min(idx[k], idx[k + 1]), max(idx[k], idx[k + 1]))
-                        if key in eid:
-                            chosen.append(eid[key])
+                ok = np.isfinite(dist[:-1]) & np.isfinite(dist[1:])
+                ids = program.edge_ids(idx[:-1][ok], idx[1:][ok])
+                chosen = ids[ids >= 0].tolist()
             per_side.append(chosen)
         n = sum(len(c) for c in per_side)
         if n == 0:
@@ -163,12 +160,10 @@ class RldModel:
                                 heading=heading)
         stats.update(program.stats)
         if fixed_edges:
-            eid = {(int(i), int(j)): k for k, (i, j) in enumerate(program.edges)}
             cols = program.block("a")
             for a, b in fixed_edges:
-                la, lb = int(np.searchsorted(window, a)), int(np.searchsorted(window, b))
-                k = eid.get((min(la, lb), max(la, lb)))
-                if k is None:
+                k = int(program.edge_ids(np.searchsorted(window, a), np.searchsorted(window, b)))
+                if k < 0:
                     return Lane.not_found(points, f"fixed edge ({a}, {b}) is not a candidate "
                                           "edge of the program", status=LaneStatus.INFEASIBLE,
                                           stats=stats)
@@ -238,13 +233,11 @@ class RldModel:
             y0 = [pose.to_local(sub[[p[0]]])[0, 1] for p in paths]
             left, right = (paths[0], paths[1]) if y0[0] >= y0[1] else (paths[1], paths[0])
         self._previous = [sub[left], sub[right]]
-        eid = {(int(i), int(j)): k for k, (i, j) in enumerate(program.edges)}
-        used = [[eid[(min(a, b), max(a, b))] for a, b in zip(p[:-1], p[1:], strict=True)]
-                for p in (left, right)]
+        used = [program.edge_ids(p[:-1], p[1:]) for p in (np.asarray(left), np.asarray(right))]
         if program.sided:
             x_lane = program.solution_from_edges(used[0], used[1])
         else:
-            x_lane = program.solution_from_edges(np.array(used[0] + used[1], dtype=int))
+            x_lane = program.solution_from_edges(np.concatenate(used))
         lane_cost = program.objective(x_lane)
         return Lane(
             cones=points,

@@ -378,3 +378,18 @@ def test_correct_colours_keep_each_boundary_to_one_label():
     # Every chosen edge joins cones of one label.
     for side in (lane.left, lane.right):
         assert len(set(colors[side])) == 1
+
+
+def test_program_edge_ids_hand_worked():
+    pts = np.array([[0, 2], [3.5, 2], [7, 2], [0, -2], [3.5, -2], [7, -2]], float)
+    program = build_program(pts, Pose(0.0, 0.0, 0.0), LaneParams(max_cones=6))
+    edges = [tuple(e) for e in program.edges.tolist()]
+    k = edges.index((0, 1))
+    # Either order finds the edge; a pair the program has no edge for is -1.
+    assert program.edge_ids([0, 1], [1, 0]).tolist() == [k, k]
+    assert (0, 2) not in edges  # 7 m: longer than the spacing limit
+    assert program.edge_ids([0, 2], [2, 0]).tolist() == [-1, -1]
+    assert int(program.edge_ids(np.int64(1), np.int64(0))) == k  # scalars too
+    assert program.edge_ids([], []).shape == (0,)
+    all_ids = program.edge_ids(program.edges[:, 1], program.edges[:, 0])
+    assert all_ids.tolist() == list(range(program.n_edges))
