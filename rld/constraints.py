@@ -263,12 +263,7 @@ def lane_widths(left: np.ndarray, right: np.ndarray, closed: bool = False) -> np
         out.append(geo.point_polyline_distance(Q, T))
         # k = 1: segments as queries, against every target segment (or the single point).
         if Q.shape[0] >= 2:
-            q0, q1 = Q[:-1][:, None, :], Q[1:][:, None, :]
-            if T.shape[0] >= 2:
-                t0, t1 = T[:-1][None, :, :], T[1:][None, :, :]
-            else:
-                t0 = t1 = T[None, :, :]
-            out.append(geo.segment_distance(q0, q1, t0, t1).min(axis=1))
+            out.append(geo.polyline_segments_distance(Q, T))
     return np.concatenate(out)
 
 

@@ -28,6 +28,7 @@ __all__ = [
     "resample_polyline",
     "point_polyline_distance",
     "segment_parameter",
+    "polyline_segments_distance",
     "nearest_on_polyline",
     "ring_is_simple",
     "centerline",
@@ -152,7 +153,22 @@ def point_polyline_distance(p, poly: np.ndarray) -> np.ndarray:
     poly = np.ascontiguousarray(poly, dtype=np.float64)
     if poly.shape[0] == 0:
         return np.full(p.shape[0], np.inf)
-    return np.array([gk.point_polyline_distance(q[0], q[1], poly) for q in p])
+    out = np.empty(p.shape[0])
+    gk.point_polyline_distance_many(np.ascontiguousarray(p), poly, out)
+    return out
+
+
+def polyline_segments_distance(q: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    """Least distance from each segment of the polyline ``q`` (k >= 2, 2) to the polyline
+    ``poly`` (m >= 1, 2; one point when m == 1), metres: (k - 1,)."""
+    q = np.ascontiguousarray(q, dtype=np.float64)
+    poly = np.ascontiguousarray(poly, dtype=np.float64)
+    out = np.empty(max(q.shape[0] - 1, 0))
+    if poly.shape[0] == 0:
+        out[:] = np.inf
+        return out
+    gk.polyline_segments_distance_many(q, poly, out)
+    return out
 
 
 def segment_parameter(p, a, b) -> np.ndarray:

@@ -252,6 +252,32 @@ def point_polyline_distance(px, py, poly):
 
 
 @njit(cache=True)
+def point_polyline_distance_many(p, poly, out):
+    """out[i] = distance from p[i] to the polyline ``poly`` (k >= 1, 2)."""
+    for i in range(p.shape[0]):
+        out[i] = point_polyline_distance(p[i, 0], p[i, 1], poly)
+
+
+@njit(cache=True)
+def polyline_segments_distance_many(q, poly, out):
+    """out[i] = least distance from the segment q[i]-q[i+1] to the polyline ``poly`` (k >= 1,
+    2; one point when k == 1), for i < len(q) - 1."""
+    k = poly.shape[0]
+    for i in range(q.shape[0] - 1):
+        ax, ay, bx, by = q[i, 0], q[i, 1], q[i + 1, 0], q[i + 1, 1]
+        if k == 1:
+            out[i] = point_segment_distance(poly[0, 0], poly[0, 1], ax, ay, bx, by)
+            continue
+        best = np.inf
+        for j in range(k - 1):
+            d = segment_distance(ax, ay, bx, by, poly[j, 0], poly[j, 1], poly[j + 1, 0],
+                                 poly[j + 1, 1])
+            if d < best:
+                best = d
+        out[i] = best
+
+
+@njit(cache=True)
 def polyline_self_intersects(ring):
     """Whether the closed ring ``ring`` (k, 2; last point joins the first) is not simple:
     two non-adjacent edges share a point, or two adjacent edges overlap."""
