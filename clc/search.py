@@ -152,6 +152,7 @@ def enumerate_candidates(
     guide: tuple[np.ndarray, np.ndarray] | None = None,
     close_loops: bool = False,
     banned: np.ndarray | None = None,
+    forbid: tuple[int, int] = (-1, -1),
 ) -> SearchResult:
     """CLC Alg. 1 up to the ranking: graph, start vertices, Alg. 2, closings.
 
@@ -160,7 +161,8 @@ def enumerate_candidates(
     ``guide``: the warm-start lane (left, right index arrays in ``points``), followed first.
     ``close_loops``: add the closing of every closable candidate (IV-E) as a further candidate;
     ``clc.solver`` closes only the ranked winner instead (see there). ``banned``: cones no path
-    may take (indices into ``points``; ``contested_dives``).
+    may take (indices into ``points``); ``forbid``: a cone per side (-1: none) that may not
+    come right after that side's whole guide, only later (``contested_dives``).
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
     g = graph if isinstance(graph, SearchGraph) else search_graph(points, params, graph)
@@ -176,7 +178,8 @@ def enumerate_candidates(
         float(params.min_width_m), float(params.max_width_m), float(params.nvd_distance_weight),
         float(params.nvd_lookahead_weight), int(it_max), np.ascontiguousarray(gl, dtype=np.int64),
         np.ascontiguousarray(gr, dtype=np.int64),
-        np.zeros(0, np.int64) if banned is None else np.ascontiguousarray(banned, dtype=np.int64))
+        np.zeros(0, np.int64) if banned is None else np.ascontiguousarray(banned, dtype=np.int64),
+        int(forbid[0]), int(forbid[1]))
     cands = CandidateList(lf, lp, rf, rp)
     features = feats
     if close_loops:
@@ -197,30 +200,49 @@ def enumerate_candidates(
 
 def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
                     start: tuple[int, int], left: np.ndarray, right: np.ndarray,
-                    margin: float, reach_m: float, iterations: int) -> list[SearchResult]:
+                    margin: float, reach_m: float, iterations: int,
+                    skip: set | None = None) -> list[SearchResult]:
     """Searches that revisit the close calls of a lane found under the iteration limit (our
     addition, docs/clc.md). The depth-first search changes a choice near the car only after
     it has exhausted everything beyond it, which under it_max it never does. For every
     position j of ``left`` or ``right`` within ``reach_m`` of its start where the next-vertex
     decider's runner-up scored at most ``margin`` above the cone taken
     (``search_kernels.contested_positions``), one more search of ``iterations`` follows the
-    lane up to j (the guide) with that cone banned, so it takes the runner-up there and
-    continues on its own. Returns one result per dive, in order (left first)."""
+    lane up to j (the guide) and may not take that cone next (``forbid``), so it takes the
+    runner-up there and continues on its own; the cone may come later, which mends a skipped
+    cone (the runner-up is the cone skipped, the one taken comes after it). When that search
+    did take the cone again somewhere, a second one bans it outright (``banned``), so it cannot
+    find its way back to the same lane. Returns one result per search, in order (left
+    first). ``skip``: the close calls already revisited, as (side, path up to and with the
+    cone, other boundary) keys; the ones revisited here are added to it and not run again."""
     out = []
     hx, hy = float(np.cos(pose.yaw)), float(np.sin(pose.yaw))
     left = np.ascontiguousarray(left, dtype=np.int64)
     right = np.ascontiguousarray(right, dtype=np.int64)
     for side, path, other in ((0, left, right), (1, right, left)):
-        pos = sk.contested_positions(points, graph.indptr, graph.indices, path, other, hx, hy,
-                                     float(params.max_turn_angle_rad),
-                                     float(params.nvd_distance_weight),
-                                     float(params.nvd_lookahead_weight), float(margin),
-                                     float(reach_m))
+        pos, _ = sk.contested_positions(points, graph.indptr, graph.indices, path, other,
+                                        hx, hy, float(params.max_turn_angle_rad),
+                                        float(params.nvd_distance_weight),
+                                        float(params.nvd_lookahead_weight), float(margin),
+                                        float(reach_m))
         for j in pos:
+            if skip is not None:
+                key = (side, path[:j + 1].tobytes(), other.tobytes())
+                if key in skip:
+                    continue
+                skip.add(key)
             guide = (left[:j], right) if side == 0 else (left, right[:j])
-            out.append(enumerate_candidates(points, pose, params, max_iterations=iterations,
-                                            graph=graph, start=start, guide=guide,
-                                            banned=path[j:j + 1]))
+            cone = int(path[j])
+            res = enumerate_candidates(points, pose, params, max_iterations=iterations,
+                                       graph=graph, start=start, guide=guide,
+                                       forbid=(cone, -1) if side == 0 else (-1, cone))
+            out.append(res)
+            lf, _, rf, _, _ = res.candidates.flat()
+            if np.any(lf == cone) or np.any(rf == cone):
+                out.append(enumerate_candidates(points, pose, params,
+                                                max_iterations=iterations, graph=graph,
+                                                start=start, guide=guide,
+                                                banned=path[j:j + 1]))
     return out
 
 

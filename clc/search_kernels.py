@@ -120,11 +120,12 @@ def _option_score(pts, adj_ptr, adj_idx, path, n, v, in_path, max_turn, hx, hy, 
 
 @njit(cache=True)
 def _choose_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx, hy,
-                   dist_weight, lookahead, dead_end, guide, guided):
+                   dist_weight, lookahead, dead_end, guide, guided, forbid):
     """The next-vertex decider: among the neighbours of the path's end that are untried at
     this frame, in no path and within the turn limit (C_seg), the one with the lowest
     ``_option_score``. The warm-start guide's next vertex wins when the path is still a
-    prefix of the guide. Returns (slot, vertex) or (-1, -1)."""
+    prefix of the guide; when the path is the whole guide, ``forbid`` (a vertex, or -1) is
+    not an option. Returns (slot, vertex) or (-1, -1)."""
     c = path[n - 1]
     s0 = adj_ptr[c]
     best = -1
@@ -133,11 +134,12 @@ def _choose_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx,
     want = -1
     if guided and n < guide.shape[0]:
         want = guide[n]
+    skip = forbid if guided and n == guide.shape[0] else -1
     for k in range(adj_ptr[c + 1] - s0):
         if tried[k]:
             continue
         v = adj_idx[s0 + k]
-        if in_path[v]:
+        if in_path[v] or v == skip:
             continue
         score = _option_score(pts, adj_ptr, adj_idx, path, n, v, in_path, max_turn, hx, hy,
                               dist_weight, lookahead, dead_end)
@@ -173,13 +175,14 @@ def contested_positions(pts, adj_ptr, adj_idx, path, other, hx, hy, max_turn, di
     ``reach`` metres of path length from its start at which the next-vertex decider had a
     close second: another option of path[:j] (not in either boundary, within the turn limit)
     whose ``_option_score`` is at most ``margin`` above that of path[j]. Returns the
-    positions in order."""
+    positions in order and, for each, the best-scoring such option (the runner-up)."""
     N = pts.shape[0]
     dead_end = dead_end_score(pts, adj_ptr, adj_idx, max_turn, dist_weight)
     in_path = np.zeros(N, dtype=np.bool_)
     for v in other:
         in_path[v] = True
     out = np.empty(path.shape[0], dtype=np.int64)
+    runner = np.empty(path.shape[0], dtype=np.int64)
     m = 0
     arc = 0.0
     for j in range(1, path.shape[0]):
@@ -192,6 +195,7 @@ def contested_positions(pts, adj_ptr, adj_idx, path, other, hx, hy, max_turn, di
         chosen = _option_score(pts, adj_ptr, adj_idx, path, j, path[j], in_path, max_turn, hx,
                                hy, dist_weight, lookahead, dead_end)
         second = np.inf
+        second_v = -1
         for s in range(adj_ptr[c], adj_ptr[c + 1]):
             v = adj_idx[s]
             if v == path[j] or in_path[v]:
@@ -200,10 +204,12 @@ def contested_positions(pts, adj_ptr, adj_idx, path, other, hx, hy, max_turn, di
                                dist_weight, lookahead, dead_end)
             if sc < second:
                 second = sc
+                second_v = v
         if second < np.inf and second - chosen <= margin:
             out[m] = j
+            runner[m] = second_v
             m += 1
-    return out[:m]
+    return out[:m], runner[:m]
 
 
 @njit(cache=True)
@@ -590,7 +596,8 @@ def _grow_rows(a, need):
 
 @njit(cache=True)
 def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, wmin, wmax,
-                    dist_weight, lookahead, max_iterations, guide_l, guide_r, banned):
+                    dist_weight, lookahead, max_iterations, guide_l, guide_r, banned,
+                    forbid_l=-1, forbid_r=-1):
     """CLC Alg. 2: enumerate the path pairs from (start_l, start_r) that satisfy CD (eq. 6).
 
     ``pts`` (N, 2) float64 metres; ``adj_ptr`` (N+1,), ``adj_idx`` the search graph in CSR form
@@ -600,7 +607,9 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     onward scores as the worst step the graph holds, phi_max + dist_weight * longest edge);
     ``max_iterations`` it_max (<= 0: no limit); ``guide_l``, ``guide_r`` the warm-start paths
     (may be empty) the search follows first; ``banned`` vertices (may be empty) are in no
-    path (the contested-choice dives of ``clc.solver``).
+    path; ``forbid_l`` (``forbid_r``, -1: none) is not the next left (right) vertex right
+    after the whole left (right) guide, but may come later (the contested-choice dives of
+    ``clc.search``).
 
     Returns ``(left_flat, left_ptr, right_flat, right_ptr, features, iterations, complete)``:
     candidate k's left boundary is ``left_flat[left_ptr[k]:left_ptr[k+1]]`` (likewise right),
@@ -685,10 +694,10 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
         f = depth
         kl, vl = _choose_option(pts, adj_ptr, adj_idx, L, nL, triedL[f], in_path, max_turn,
                                 hx, hy, dist_weight, lookahead, dead_end, guide_l,
-                                on_gl[nL - 1])
+                                on_gl[nL - 1], forbid_l)
         kr, vr = _choose_option(pts, adj_ptr, adj_idx, R, nR, triedR[f], in_path, max_turn,
                                 hx, hy, dist_weight, lookahead, dead_end, guide_r,
-                                on_gr[nR - 1])
+                                on_gr[nR - 1], forbid_r)
         if kl < 0 and kr < 0:
             # Frame exhausted: undo the extension that made it.
             if depth == 0:

@@ -47,6 +47,8 @@ MATCH_TOLERANCE_M = 0.5
 #: critical distance of the protocol is 20 m.
 DIVE_ITERATIONS = 40
 DIVE_REACH_M = 25.0
+#: Rounds of dives: a dive whose lane wins has its own close calls revisited.
+DIVE_ROUNDS = 3
 
 
 def _match(prev_xy: np.ndarray, tree: cKDTree) -> np.ndarray:
@@ -117,6 +119,48 @@ class ClcModel:
                                  max_iterations=max(it - half, 1) if it > 0 else 0)
         return merge_results(a, b)
 
+    def _dive_rounds(self, points, pose, res, winner):
+        """The contested-choice dives (``clc.search.contested_dives``) around ``winner``
+        (left, right, closed, score), in rounds: the ranker's pick of every dive is a finalist
+        beside the winner; they differ from it at a close call and are about as long, so the
+        ranker's features barely tell them apart, and RLD's objective (the shared
+        ``lane_cost``, eq. 29) decides. When a dive's lane wins, its own close calls are
+        revisited in the next round (up to DIVE_ROUNDS): a lane two close calls away from the
+        winner, where neither change alone is feasible, is reached in two steps. A dive is
+        identified by the path it follows and the cone it bans and is never run twice.
+        Returns the final (left, right, closed, score), the dives run, their iterations and
+        the rounds run (a round that changes nothing ends them)."""
+        p = self.params
+        done: set[tuple] = set()
+        n_dives = iterations = rounds = 0
+        cost = None  # the winner's, computed once a dive has a lane to compare
+        while rounds < DIVE_ROUNDS:
+            rounds += 1
+            left, right = winner[0], winner[1]
+            dives = contested_dives(points, pose, p, res.graph, res.start, left, right,
+                                    p.contested_margin, DIVE_REACH_M,
+                                    DIVE_ITERATIONS + left.size + right.size, skip=done)
+            best, best_cost = None, cost
+            for dive in dives:
+                n_dives += 1
+                iterations += dive.iterations
+                if not dive.candidates:
+                    continue
+                s = np.asarray(self.ranker.score(points, pose, p, dive.candidates,
+                                                 dive.features), dtype=np.float64)
+                k = int(np.argmax(s))
+                a, b, c = dive.candidates[k]
+                if cost is None:
+                    cost = best_cost = lane_cost(points, winner[0], winner[1], pose, p,
+                                                 closed=winner[2])
+                dc = lane_cost(points, a, b, pose, p, closed=c)
+                if dc < best_cost:  # ties: the earlier lane
+                    best, best_cost = (a.copy(), b.copy(), c, float(s[k])), dc
+            if best is None:
+                break
+            winner, cost = best, best_cost
+        return (*winner, n_dives, iterations, rounds)
+
     def solve(self, points: np.ndarray, pose: Pose, colors=None, time_limit_s=None,
               confidence=None) -> Lane:
         t0 = time.perf_counter()
@@ -164,31 +208,12 @@ class ClcModel:
         left, right, closed = res.candidates[best]
         left, right = left.copy(), right.copy()
         score = float(scores[best])
-        dives = []
+        n_dives = rounds = 0
         if not res.complete and self.params.contested_margin > 0:
-            # Each dive first rebuilds the lane it follows (one iteration per guided cone),
-            # then has DIVE_ITERATIONS of its own.
-            dives = contested_dives(points, pose, self.params, res.graph, res.start, left,
-                                    right, self.params.contested_margin, DIVE_REACH_M,
-                                    DIVE_ITERATIONS + left.size + right.size)
-        # The ranker's pick of every dive is a finalist beside the first search's winner; they
-        # differ from it at a close call and are about as long, so the ranker's features barely
-        # tell them apart. RLD's objective (the shared lane_cost, eq. 29) decides among them.
-        finalists = [(left, right, closed, score)]
-        for dive in dives:
-            iterations += dive.iterations
-            if not dive.candidates:
-                continue
-            s = np.asarray(self.ranker.score(points, pose, self.params, dive.candidates,
-                                             dive.features), dtype=np.float64)
-            k = int(np.argmax(s))
-            a, b, c = dive.candidates[k]
-            finalists.append((a.copy(), b.copy(), c, float(s[k])))
-        if len(finalists) > 1:
-            costs = [lane_cost(points, a, b, pose, self.params, closed=c)
-                     for a, b, c, _ in finalists]
-            left, right, closed, score = finalists[int(np.argmin(costs))]  # ties: the first
-        stats.update(dives=len(dives), iterations=iterations)
+            left, right, closed, score, n_dives, it, rounds = self._dive_rounds(
+                points, pose, res, (left, right, closed, score))
+            iterations += it
+        stats.update(dives=n_dives, dive_rounds=rounds, iterations=iterations)
         if not closed and closable(res.graph, left, right):
             closed = lane_is_feasible(points[left], points[right], self.params, closed=True)
         self._prev = (points[left].copy(), points[right].copy())
