@@ -198,6 +198,21 @@ def enumerate_candidates(
                         complete=bool(complete), start=(int(start[0]), int(start[1])), graph=g)
 
 
+def _arc_behind(points: np.ndarray, path: np.ndarray, pose: Pose) -> float:
+    """Path length (metres) of ``path`` behind the car: from its start to where it crosses
+    the line through the car across its heading (the whole path when it never does; 0 when
+    it starts on or past the line). The part of a dive's reach that does not count."""
+    x = pose.to_local(points[path])[:, 0]
+    seg = np.hypot(*np.diff(points[path], axis=0).T)
+    ahead = np.flatnonzero(x >= 0.0)
+    if ahead.size == 0:
+        return float(seg.sum())
+    k = int(ahead[0])
+    if k == 0:
+        return 0.0
+    return float(seg[: k - 1].sum() + seg[k - 1] * (-x[k - 1]) / (x[k] - x[k - 1]))
+
+
 def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
                     start: tuple[int, int], left: np.ndarray, right: np.ndarray,
                     margin: float, reach_m: float, iterations: int,
@@ -205,7 +220,8 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
     """Searches that revisit the close calls of a lane found under the iteration limit (our
     addition, docs/clc.md). The depth-first search changes a choice near the car only after
     it has exhausted everything beyond it, which under it_max it never does. For every
-    position j of ``left`` or ``right`` within ``reach_m`` of its start where the next-vertex
+    position j of ``left`` or ``right`` within ``reach_m`` of path ahead of the car (the part
+    of the path behind the car does not count, ``_arc_behind``) where the next-vertex
     decider's runner-up scored at most ``margin`` above the cone taken
     (``search_kernels.contested_positions``), one more search of ``iterations`` follows the
     lane up to j (the guide) and may not take that cone next (``forbid``), so it takes the
@@ -224,7 +240,7 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
                                         hx, hy, float(params.max_turn_angle_rad),
                                         float(params.nvd_distance_weight),
                                         float(params.nvd_lookahead_weight), float(margin),
-                                        float(reach_m))
+                                        float(reach_m) + _arc_behind(points, path, pose))
         for j in pos:
             if skip is not None:
                 key = (side, path[:j + 1].tobytes(), other.tobytes())

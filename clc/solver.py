@@ -43,7 +43,7 @@ log = logging.getLogger(__name__)
 MATCH_TOLERANCE_M = 0.5
 #: The contested-choice dives (``clc.search.contested_dives``, ``LaneParams.contested_margin``):
 #: the iterations of each beyond rebuilding the lane it follows, and how far along each
-#: boundary of the ranked lane (metres of path from its start) a close call is revisited; the
+#: boundary of the ranked lane (metres of path ahead of the car) a close call is revisited; the
 #: critical distance of the protocol is 20 m.
 DIVE_ITERATIONS = 40
 DIVE_REACH_M = 25.0

@@ -206,23 +206,25 @@ class LaneParams:
     worse at 10 and 30 %, 1.5 and 2.0 worse everywhere."""
     contested_margin: float = 0.2
     """CLC's contested-choice dives (our addition, ``clc.search.contested_dives``): when the
-    search stopped at it_max, every choice of the ranked lane within 25 m of its start whose
-    runner-up scored at most this much higher in the next-vertex decider (the score's units,
-    radians) is revisited by a search that follows the lane up to there and may not take that
-    cone next (it may come later: a skipped cone is mended), with 40 iterations beyond
-    rebuilding the lane, and by one that bans the cone when the first took it again; the
-    ranker's pick of each dive and of the first search are the finalists, and RLD's objective
-    (``rld.costs.lane_cost``) picks among them. A winning dive's own close calls are revisited
-    in a next round, up to ``clc.solver.DIVE_ROUNDS`` (3). 0: no dives. Measured 2026-12-01 on
-    the six shared tracks (every pose, learned ranker, tolerant critical %, strict in
-    brackets): R = 50 m 0 -> 0.2 gave 1.60 (4.88) / 3.13 (10.33) / 7.28 (15.50) / 19.80
-    (34.21) -> 0.36 (4.08) / 0.58 (6.91) / 2.84 (11.14) / 11.43 (26.71) at 0 / 10 / 30 / 50 %
-    false positives; R = 30 m 7.64 / 12.66 / 20.45 / 29.84 -> 0.95 (4.66) / 6.19 (12.37) /
-    10.70 (22.05) / 25.25 (54.22). One round with the cone banned (the first version) gave
-    1.16 / 1.38 / 4.15 / 12.45 at R = 50 m and 6.99 / 10.70 / 11.64 / 25.69 at R = 30 m. 0.1
-    gave 1.60 / 1.82 / 4.22 / 14.99 and 0.4 1.97 / 2.47 / 6.11 / 15.94 at R = 50 m (one round,
-    banned). The learned ranker alone as the judge of the finalists gave 3.86 / 4.22 / 5.46 /
-    12.15 (it cannot tell lanes that differ at one cone apart)."""
+    search stopped at it_max, every choice of the ranked lane within 25 m of path ahead of the
+    car whose runner-up scored at most this much higher in the next-vertex decider (the
+    score's units, radians) is revisited by a search that follows the lane up to there and may
+    not take that cone next (it may come later: a skipped cone is mended), with 40 iterations
+    beyond rebuilding the lane, and by one that bans the cone when the first took it again;
+    the ranker's pick of each dive and of the first search are the finalists, and RLD's
+    objective (``rld.costs.lane_cost``) picks among them. A winning dive's own close calls are
+    revisited in a next round, up to ``clc.solver.DIVE_ROUNDS`` (3). 0: no dives. Measured
+    2026-12-01 on the six shared tracks (every pose, learned ranker, tolerant critical %,
+    strict in brackets): R = 50 m 0 -> 0.2 gave 1.60 (4.88) / 3.13 (10.33) / 7.28 (15.50) /
+    19.80 (34.21) -> 0.15 (4.08) / 0.29 (6.84) / 2.55 (11.06) / 11.14 (26.71) at 0 / 10 / 30
+    / 50 % false positives; R = 30 m 7.64 / 12.66 / 20.45 / 29.84 -> 0.66 (4.51) / 6.11
+    (12.23) / 10.63 (21.91) / 25.25 (54.22). One round with the cone banned, the reach counted
+    from the boundary's start (the first version) gave 1.16 / 1.38 / 4.15 / 12.45 at R = 50 m
+    and 6.99 / 10.70 / 11.64 / 25.69 at R = 30 m. With the current dives 0.3 gave 0.29 / 0.44
+    / 2.91 (R = 50 m) and 0.58 / 3.86 / 9.68 (R = 30 m) at 0 / 10 / 30 %, 0.4 0.95 / 1.02 /
+    3.42 and 1.60 / 4.22 / 12.23. The learned ranker alone as the judge of the finalists gave
+    3.86 / 4.22 / 5.46 / 12.15 with the first version (it cannot tell lanes that differ at one
+    cone apart)."""
     start_pairs: int = 4
     """How many start pairs CLC tries, most symmetric first (IV-C), when a pair has no feasible
     path pair: the search runs from the next one instead of returning no lane (our addition;

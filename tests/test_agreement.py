@@ -8,8 +8,12 @@ which is RLD's cone window).
 
 What holds today, and what these tests assert:
 - Wherever both lanes follow the ground truth (strict categories ``gt``, ``near_gt`` or
-  ``too_short``), they are the same lane over the common horizon: the two methods share the
-  side convention, the order from the car forward and the boundary cones.
+  ``too_short``, and neither diverges from it anywhere), they are the same lane over the
+  common horizon: the two methods share the side convention, the order from the car forward
+  and the boundary cones. (A ``near_gt`` lane may diverge 20 m or more from the car; where it
+  does inside the common horizon the two lanes differ by its divergence, which is that
+  method's own failure. Seen since 2026-12-01: CLC skipping a kinked cone 23 m ahead that
+  RLD's objective, on CLC's longer lane, also prefers to skip.)
 - The two methods do not yet agree at every pose: where they differ, one of them (or both)
   diverges from the ground truth (each method's own failures, docs/results.md). The agreement
   rate is held to a floor a little under what was measured (generated tracks 102 of 116 poses,
@@ -20,6 +24,7 @@ What holds today, and what these tests assert:
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pytest
@@ -52,8 +57,9 @@ def _compare(tracks, every: int, folder: Path) -> tuple[int, list[str], list[str
             n += 1
             if lanes_agree(lanes["rld"], lanes["clc"]):
                 continue
-            cats = {m: score_lane(f, lane.left, lane.right, lane.ok, lane.closed).category
-                    for m, lane in lanes.items()}
+            scores = {m: score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
+                      for m, lane in lanes.items()}
+            cats = {m: s.category for m, s in scores.items()}
             path = folder / f"{track.name.replace(' ', '_')}_pose{k}.png"
             import matplotlib.pyplot as plt
 
@@ -66,7 +72,8 @@ def _compare(tracks, every: int, folder: Path) -> tuple[int, list[str], list[str
             line = (f"{track.name} pose {k}: rld {cats['rld']}, clc {cats['clc']} "
                     f"(plot: {path})")
             disagree.append(line)
-            if all(lanes[m].ok and cats[m] in FOLLOWS_TRUTH for m in lanes):
+            if all(lanes[m].ok and cats[m] in FOLLOWS_TRUTH
+                   and math.isinf(scores[m].divergence_m) for m in lanes):
                 contradict.append(line)
     return n, disagree, contradict
 

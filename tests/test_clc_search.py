@@ -161,6 +161,22 @@ def test_forbid_removes_exactly_the_pairs_with_that_next_cone(seed, n, pick, sid
     assert pair not in as_set(res)
 
 
+def test_dive_reach_counts_from_the_car():
+    """The part of a boundary behind the car is not counted in a dive's reach: cones at
+    x = -4 and -1.5 behind the car (at the origin, heading +x), then 2 and 5.5: 2.5 m to the
+    second cone and 1.5 m on to the line through the car, 4 m; none behind: 0."""
+    from clc.search import _arc_behind
+    pts = np.array([[-4.0, 2.0], [-1.5, 2.0], [2.0, 2.0], [5.5, 2.0]])
+    assert _arc_behind(pts, np.arange(4), POSE) == pytest.approx(4.0)
+    assert _arc_behind(pts, np.arange(2, 4), POSE) == 0.0
+    # A boundary wholly behind the car: all of it. A diagonal crossing: 5 m legs (3-4-5).
+    assert _arc_behind(pts, np.arange(2), POSE) == pytest.approx(2.5)
+    diag = np.array([[-3.0, 0.0], [0.0, 4.0], [3.0, 8.0]])
+    assert _arc_behind(diag, np.arange(3), POSE) == pytest.approx(5.0)
+    turned = Pose(0.0, 0.0, math.pi)  # heading -x: now the last two cones are behind
+    assert _arc_behind(pts, np.arange(3, -1, -1), turned) == pytest.approx(3.5 + 2.0)
+
+
 def test_contested_positions_hand_worked():
     """A straight left boundary with one cone 0.15 m off the line beside its third cone: the
     decider's choice at position 2 has a close second (the off-line cone), nowhere else."""
