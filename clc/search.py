@@ -236,11 +236,11 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
     left = np.ascontiguousarray(left, dtype=np.int64)
     right = np.ascontiguousarray(right, dtype=np.int64)
     for side, path, other in ((0, left, right), (1, right, left)):
-        pos, _ = sk.contested_positions(points, graph.indptr, graph.indices, path, other,
-                                        hx, hy, float(params.max_turn_angle_rad),
-                                        float(params.nvd_distance_weight),
-                                        float(params.nvd_lookahead_weight), float(margin),
-                                        float(reach_m) + _arc_behind(points, path, pose))
+        pos = sk.contested_positions(points, graph.indptr, graph.indices, path, other, hx, hy,
+                                     float(params.max_turn_angle_rad),
+                                     float(params.nvd_distance_weight),
+                                     float(params.nvd_lookahead_weight), float(margin),
+                                     float(reach_m) + _arc_behind(points, path, pose))
         for j in pos:
             if skip is not None:
                 key = (side, path[:j + 1].tobytes(), other.tobytes())

@@ -175,14 +175,13 @@ def contested_positions(pts, adj_ptr, adj_idx, path, other, hx, hy, max_turn, di
     ``reach`` metres of path length from its start at which the next-vertex decider had a
     close second: another option of path[:j] (not in either boundary, within the turn limit)
     whose ``_option_score`` is at most ``margin`` above that of path[j]. Returns the
-    positions in order and, for each, the best-scoring such option (the runner-up)."""
+    positions in order."""
     N = pts.shape[0]
     dead_end = dead_end_score(pts, adj_ptr, adj_idx, max_turn, dist_weight)
     in_path = np.zeros(N, dtype=np.bool_)
     for v in other:
         in_path[v] = True
     out = np.empty(path.shape[0], dtype=np.int64)
-    runner = np.empty(path.shape[0], dtype=np.int64)
     m = 0
     arc = 0.0
     for j in range(1, path.shape[0]):
@@ -195,7 +194,6 @@ def contested_positions(pts, adj_ptr, adj_idx, path, other, hx, hy, max_turn, di
         chosen = _option_score(pts, adj_ptr, adj_idx, path, j, path[j], in_path, max_turn, hx,
                                hy, dist_weight, lookahead, dead_end)
         second = np.inf
-        second_v = -1
         for s in range(adj_ptr[c], adj_ptr[c + 1]):
             v = adj_idx[s]
             if v == path[j] or in_path[v]:
@@ -204,12 +202,10 @@ def contested_positions(pts, adj_ptr, adj_idx, path, other, hx, hy, max_turn, di
                                dist_weight, lookahead, dead_end)
             if sc < second:
                 second = sc
-                second_v = v
         if second < np.inf and second - chosen <= margin:
             out[m] = j
-            runner[m] = second_v
             m += 1
-    return out[:m], runner[:m]
+    return out[:m]
 
 
 @njit(cache=True)

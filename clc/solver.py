@@ -126,8 +126,9 @@ class ClcModel:
         ranker's features barely tell them apart, and RLD's objective (the shared
         ``lane_cost``, eq. 29) decides. When a dive's lane wins, its own close calls are
         revisited in the next round (up to DIVE_ROUNDS): a lane two close calls away from the
-        winner, where neither change alone is feasible, is reached in two steps. A dive is
-        identified by the path it follows and the cone it bans and is never run twice.
+        winner, where neither change alone is feasible, is reached in two steps. A close call
+        is identified by the path up to and with its cone and the other boundary, and is never
+        revisited twice.
         Returns the final (left, right, closed, score), the dives run, their iterations and
         the rounds run (a round that changes nothing ends them)."""
         p = self.params

@@ -190,7 +190,7 @@ def test_contested_positions_hand_worked():
     def positions(margin, reach=100.0, path=L, other=R):
         return sk.contested_positions(pts, g.indptr, g.indices, path, other, 1.0, 0.0,
                                       PARAMS.max_turn_angle_rad, PARAMS.nvd_distance_weight,
-                                      PARAMS.nvd_lookahead_weight, margin, reach)[0].tolist()
+                                      PARAMS.nvd_lookahead_weight, margin, reach).tolist()
 
     assert positions(0.2) == [2]
     assert positions(0.0) == []  # the on-line cone scores strictly better
