@@ -218,29 +218,34 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
                     margin: float, reach_m: float, iterations: int,
                     skip: set | None = None) -> list[SearchResult]:
     """Searches that revisit the close calls of a lane found under the iteration limit (our
-    addition, docs/clc.md). The depth-first search changes a choice near the car only after
-    it has exhausted everything beyond it, which under it_max it never does. For every
-    position j of ``left`` or ``right`` within ``reach_m`` of path ahead of the car (the part
-    of the path behind the car does not count, ``_arc_behind``) where the next-vertex
-    decider's runner-up scored at most ``margin`` above the cone taken
-    (``search_kernels.contested_positions``), one more search of ``iterations`` follows the
-    lane up to j (the guide) and may not take that cone next (``forbid``), so it takes the
-    runner-up there and continues on its own; the cone may come later, which mends a skipped
-    cone (the runner-up is the cone skipped, the one taken comes after it). When that search
-    did take the cone again somewhere, a second one bans it outright (``banned``), so it cannot
-    find its way back to the same lane. Returns one result per search, in order (left
-    first). ``skip``: the close calls already revisited, as (side, path up to and with the
-    cone, other boundary) keys; the ones revisited here are added to it and not run again."""
+    addition, docs/clc.md). The depth-first search changes a choice near the car only after it
+    has exhausted everything beyond it, which under it_max it never does. For every position j
+    of ``left`` or ``right`` within ``reach_m`` of path ahead of the car (the part of the path
+    behind the car does not count, ``_arc_behind``) where the next-vertex decider's runner-up
+    scored at most ``margin`` above the cone taken (``search_kernels.contested_positions``), or
+    whose edge passes a skipped cone within ``params.skipped_cone_m``
+    (``search_kernels.skipped_positions``), one more search of ``iterations`` follows the lane
+    up to j (the guide) and may not take that cone next (``forbid``), so it takes the runner-up
+    there and continues on its own; the cone may come later, which mends a skipped cone (the
+    runner-up is the cone skipped, the one taken comes after it). When that search did take the
+    cone again somewhere, a second one bans it outright (``banned``), so it cannot find its way
+    back to the same lane. Returns one result per search, in order (left first). ``skip``: the
+    close calls already revisited, as (side, path up to and with the cone, other boundary) keys;
+    the ones revisited here are added to it and not run again."""
     out = []
     hx, hy = float(np.cos(pose.yaw)), float(np.sin(pose.yaw))
     left = np.ascontiguousarray(left, dtype=np.int64)
     right = np.ascontiguousarray(right, dtype=np.int64)
     for side, path, other in ((0, left, right), (1, right, left)):
+        reach = float(reach_m) + _arc_behind(points, path, pose)
         pos = sk.contested_positions(points, graph.indptr, graph.indices, path, other, hx, hy,
                                      float(params.max_turn_angle_rad),
                                      float(params.nvd_distance_weight),
-                                     float(params.nvd_lookahead_weight), float(margin),
-                                     float(reach_m) + _arc_behind(points, path, pose))
+                                     float(params.nvd_lookahead_weight), float(margin), reach)
+        if params.skipped_cone_m > 0:
+            pos = np.union1d(pos, sk.skipped_positions(points, graph.indptr, graph.indices, path,
+                                                       other, float(params.skipped_cone_m),
+                                                       reach))
         for j in pos:
             if skip is not None:
                 key = (side, path[:j + 1].tobytes(), other.tobytes())

@@ -44,6 +44,7 @@ from numba import njit
 
 from rld.geometry_kernels import (
     point_segment_distance,
+    point_segment_param,
     segment_distance,
     segment_distance_end,
     segments_intersect,
@@ -205,6 +206,41 @@ def contested_positions(pts, adj_ptr, adj_idx, path, other, hx, hy, max_turn, di
         if second < np.inf and second - chosen <= margin:
             out[m] = j
             m += 1
+    return out[:m]
+
+
+@njit(cache=True)
+def skipped_positions(pts, adj_ptr, adj_idx, path, other, tol, reach):
+    """Positions j >= 1 of ``path`` (one boundary of a lane, ``other`` the other one) within
+    ``reach`` metres of path length from its start where the edge path[j-1] -> path[j] passes
+    a skipped cone: a search-graph neighbour of path[j-1], in neither boundary, whose closest
+    point on that edge is inside it (not an end) and at most ``tol`` metres away. Returns the
+    positions in order."""
+    N = pts.shape[0]
+    used = np.zeros(N, dtype=np.bool_)
+    for v in path:
+        used[v] = True
+    for v in other:
+        used[v] = True
+    out = np.empty(path.shape[0], dtype=np.int64)
+    m = 0
+    arc = 0.0
+    for j in range(1, path.shape[0]):
+        a = path[j - 1]
+        b = path[j]
+        arc += math.hypot(pts[b, 0] - pts[a, 0], pts[b, 1] - pts[a, 1])
+        if arc > reach:
+            break
+        for s in range(adj_ptr[a], adj_ptr[a + 1]):
+            v = adj_idx[s]
+            if used[v]:
+                continue
+            d, t = point_segment_param(pts[v, 0], pts[v, 1], pts[a, 0], pts[a, 1],
+                                       pts[b, 0], pts[b, 1])
+            if 0.0 < t < 1.0 and d <= tol:
+                out[m] = j
+                m += 1
+                break
     return out[:m]
 
 

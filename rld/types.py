@@ -103,7 +103,7 @@ def as_cones(cones: Any, min_cones: int = MIN_CONES) -> np.ndarray:
 
 #: LaneParams fields for which 0 is meaningful.
 _MAY_BE_ZERO = ("window_behind_m", "nvd_distance_weight", "nvd_lookahead_weight",
-                "contested_margin")
+                "contested_margin", "skipped_cone_m")
 
 
 @dataclass(frozen=True)
@@ -225,6 +225,19 @@ class LaneParams:
     3.42 and 1.60 / 4.22 / 12.23. The learned ranker alone as the judge of the finalists gave
     3.86 / 4.22 / 5.46 / 12.15 with the first version (it cannot tell lanes that differ at one
     cone apart)."""
+    skipped_cone_m: float = 0.4
+    """A second trigger of CLC's contested-choice dives (our addition,
+    ``clc.search_kernels.skipped_positions``): an edge of the ranked lane within the dive reach
+    that passes a cone not in the lane, at most this far from the edge's inside (metres), is
+    revisited like a close call: the dive may not take the edge's far cone next, so it takes
+    the skipped one, and RLD's objective judges. The next-vertex decider can rank a cone on
+    the line well below a false positive beyond it, so the margin alone misses such skips.
+    0: this trigger off. Measured 2026-12-02 on the six shared tracks (every pose, learned
+    ranker, tolerant critical %): R = 30 m 0.66 / 6.11 / 10.63 / 25.25 -> 0.66 / 4.73 / 9.97
+    / 24.24 at 0 / 10 / 30 / 50 % false positives with 0.4; R = 50 m unchanged (0.15 / 0.29
+    / 2.55 / 11.14, strict too). 0.3 changed nothing; 0.5 gave the same at R = 30 m but put
+    false positives 0.45 m off the line into lanes at R = 50 m (strict 6.84 -> 7.57 % at 10
+    %), 1.0 was worse at 30 %."""
     start_pairs: int = 4
     """How many start pairs CLC tries, most symmetric first (IV-C), when a pair has no feasible
     path pair: the search runs from the next one instead of returning no lane (our addition;

@@ -200,6 +200,62 @@ def test_contested_positions_hand_worked():
     assert len(positions(5.0)) > 1
 
 
+def test_skipped_positions_hand_worked():
+    """A straight left boundary that skips its third cone (edge 1 -> 3 of 7 m passes over it), a
+    false positive 0.45 m off edge 3 -> 4, one 0.3 m beside cone 2 and one beyond cone 5."""
+    xs = np.arange(6) * 3.5
+    left = np.column_stack([xs, np.full(6, 1.75)])
+    right = np.column_stack([xs, np.full(6, -1.75)])
+    extra = [[7.0, 2.05], [12.25, 1.3], [17.5 + 0.3, 1.75 + 0.2]]
+    pts = np.vstack([left, right, extra])
+    g = search_graph(pts, PARAMS)
+    L = np.array([0, 1, 3, 4, 5])  # skips cone 2
+    R = np.arange(6, 12)
+
+    def positions(tol, reach=100.0, path=L, other=R):
+        return sk.skipped_positions(pts, g.indptr, g.indices, path, other, tol, reach).tolist()
+
+    assert positions(0.5) == [2, 3]  # edge 1 -> 3 passes cone 2, edge 3 -> 4 the cone at 1.3
+    assert positions(0.4) == [2]  # 0.45 m: too far
+    assert positions(0.5, reach=12.0) == [2]  # edge 3 -> 4 ends 14 m along the path
+    assert positions(0.5, reach=10.0) == []  # edge 1 -> 3 ends 10.5 m along
+    # A cone at or beyond an edge's end is no skipped cone however close (cone 12 at cone 2's
+    # x, cone 14 beyond cone 5), nor is a cone already in a boundary.
+    assert positions(0.5, path=np.arange(6)) == [4]
+    assert positions(5.0, path=R, other=np.arange(6)) == [4]  # the cone at 1.3, 3.05 m off
+    assert positions(0.5, path=R, other=np.arange(6)) == []
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(6, 12),
+       tol=st.floats(0.05, 2.0), reach=st.floats(2.0, 60.0))
+def test_skipped_positions_match_brute_force(seed, n, tol, reach):
+    pts = lane_instance(seed, n)
+    g = search_graph(pts, PARAMS)
+    rng = np.random.default_rng(seed)
+    order = rng.permutation(n)
+    path, other = order[: n // 2], order[n // 2:n // 2 + 2]
+    got = sk.skipped_positions(pts, g.indptr, g.indices, path, other, tol, reach).tolist()
+    used = set(path.tolist()) | set(other.tolist())
+    want, arc = [], 0.0
+    for j in range(1, path.size):
+        a, b = pts[path[j - 1]], pts[path[j]]
+        arc += float(np.hypot(*(b - a)))
+        if arc > reach:
+            break
+        for v in g.neighbours(int(path[j - 1])).tolist():
+            if v in used:
+                continue
+            d = b - a
+            t = float((pts[v] - a) @ d / (d @ d)) if d @ d > 0 else 0.0
+            q = pts[v] - a
+            off = abs(float(d[0] * q[1] - d[1] * q[0])) / max(float(np.hypot(*d)), 1e-300)
+            if 0.0 < t < 1.0 and off <= tol:
+                want.append(j)
+                break
+    assert got == want
+
+
 @settings(max_examples=30, deadline=None)
 @given(seed=st.integers(0, 2**31 - 1), n=st.integers(6, 9))
 def test_guide_orders_the_search_but_changes_no_candidate(seed, n):
@@ -462,6 +518,22 @@ def test_two_close_calls_are_undone_in_two_rounds(dataset_dir):
     assert lane.stats["dive_rounds"] >= 2
     assert lane.left[1:10].tolist() == f.gt_left[:9].tolist()
     assert lane.right[1:10].tolist() == f.gt_right[:9].tolist()
+
+
+def test_skipped_cone_dive_mends_track3(dataset_dir):
+    """Track 3 at R = 30 m, 10 % false positives, pose 150: the right boundary went 50 -> a
+    false positive, skipping the true cone between (0.31 m off that edge, 12 m ahead; the
+    decider's margin did not flag it). The skipped-cone dive takes it and RLD's objective
+    prefers that lane, so the lane no longer diverges before 20 m (tolerant rule)."""
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    lap = simulate_lap(load_dataset_track(dataset_dir, 3), range_m=30.0, fp_rate=0.1, seed=0)
+    f = lap.frame(150)
+    for tol, critical in ((0.0, True), (PARAMS.skipped_cone_m, False)):
+        lane = LaneSolver("clc", params=LaneParams(skipped_cone_m=tol)).solve(f.cones, f.pose)
+        s = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
+        assert s.critical_tolerant is critical
 
 
 def _pick(ranker, pts, params, res):
