@@ -23,7 +23,7 @@ from scipy.spatial import Delaunay
 
 from clc import search_kernels as sk
 from rld.constraints import candidate_edges, find_starting_vertices, lane_is_feasible
-from rld.costs import ranking_features
+from rld.costs import open_path_costs, ranking_features
 from rld.types import LaneParams, Pose
 
 __all__ = ["SearchGraph", "SearchResult", "CandidateList", "closable", "merge_results",
@@ -31,6 +31,10 @@ __all__ = ["SearchGraph", "SearchResult", "CandidateList", "closable", "merge_re
 
 #: Search-graph constructions: ``radius`` (IV-A, the paper's choice) and ``delaunay`` (IV-B).
 GRAPHS = ("radius", "delaunay")
+#: ``drop_detours`` keeps a cone with a boundary neighbour nearer than this (metres): two
+#: detections that close are one cone seen twice or a cone and a false positive beside it,
+#: which the objective cannot tell apart (dropping the true one of such a pair was measured).
+DUPLICATE_M = 1.0
 
 
 @dataclass(frozen=True)
@@ -289,3 +293,66 @@ def closable(g: SearchGraph, left: np.ndarray, right: np.ndarray) -> bool:
     to its first."""
     return (left.size >= 3 and right.size >= 3 and g.has_edge(int(left[-1]), int(left[0]))
             and g.has_edge(int(right[-1]), int(right[0])))
+
+
+def drop_detours(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
+                 left: np.ndarray, right: np.ndarray, reach_m: float,
+                 max_drops: int = 4) -> tuple[np.ndarray, np.ndarray, int]:
+    """Drop from a lane, one at a time, the cone whose removal lowers RLD's objective most
+    (eq. 29 through ``rld.costs.open_path_costs``, the judge of the dives) while the lane still
+    satisfies the shared predicates (``lane_is_feasible``); at most ``max_drops``. Our
+    addition, docs/clc.md. Only cones where the boundary bends outward, away from the lane,
+    within ``reach_m`` of path ahead of the car, with no boundary neighbour nearer than
+    ``DUPLICATE_M`` and an edge of the search graph joining their two neighbours
+    (``_detour_head``). The search takes a false positive off the line between two true cones
+    when the next-vertex decider ranks it first, and no close call flags it when the true next
+    cone scored well behind; a true cone on the inside of a hairpin bends the boundary toward
+    the lane, so it is never a candidate. Returns (left, right, cones dropped)."""
+    paths = [np.asarray(left, dtype=np.int64), np.asarray(right, dtype=np.int64)]
+    heads = [_detour_head(points, pose, graph, p, side, reach_m) for side, p in enumerate(paths)]
+    dropped = 0
+    while dropped < max_drops:
+        # One batch for both sides: each side's head, then the head without each cone j.
+        seqs, owner = [], []
+        for side, (head, js) in enumerate(heads):
+            if js:
+                seqs += [head] + [np.delete(head, j) for j in js]
+                owner += [(side, -1)] + [(side, j) for j in js]
+        if not seqs:
+            break
+        ptr = np.concatenate([[0], np.cumsum([q.size for q in seqs])])
+        cost = open_path_costs(points, np.concatenate(seqs), ptr, pose, params)
+        options, base = [], {}
+        for c, (side, j) in zip(cost.tolist(), owner, strict=True):
+            if j < 0:
+                base[side] = c
+            else:
+                options.append((c - base[side], side, j))
+        applied = False
+        for delta, side, j in sorted(options):
+            if delta >= -1e-9:
+                break
+            trial = list(paths)
+            trial[side] = np.delete(paths[side], j)
+            if lane_is_feasible(points[trial[0]], points[trial[1]], params):
+                paths, applied = trial, True
+                heads[side] = _detour_head(points, pose, graph, trial[side], side, reach_m)
+                dropped += 1
+                break
+        if not applied:
+            break
+    return paths[0], paths[1], dropped
+
+
+def _detour_head(points: np.ndarray, pose: Pose, graph: SearchGraph, path: np.ndarray,
+                 side: int, reach_m: float) -> tuple[np.ndarray, list[int]]:
+    """The part of ``path`` that decides ``drop_detours`` and the positions j in it that may be
+    dropped (``search_kernels.detour_positions``). Dropping cone j changes the objective's
+    terms of cones j - 2 .. j + 2 only, so the part up to two cones past the last position
+    decides."""
+    path = np.ascontiguousarray(path, dtype=np.int64)
+    js = sk.detour_positions(points, graph.indptr, graph.indices, path, side,
+                             float(reach_m) + _arc_behind(points, path, pose), DUPLICATE_M)
+    if js.size == 0:
+        return path[:0], []
+    return path[:min(path.size, int(js[-1]) + 3)], js.tolist()

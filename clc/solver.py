@@ -31,7 +31,14 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from clc.ranker import get_ranker
-from clc.search import GRAPHS, closable, contested_dives, enumerate_candidates, merge_results
+from clc.search import (
+    GRAPHS,
+    closable,
+    contested_dives,
+    drop_detours,
+    enumerate_candidates,
+    merge_results,
+)
 from rld.constraints import lane_is_feasible, starting_vertex_pairs
 from rld.costs import lane_cost
 from rld.types import Lane, LaneParams, LaneStatus, Pose
@@ -49,6 +56,9 @@ DIVE_ITERATIONS = 40
 DIVE_REACH_M = 25.0
 #: Rounds of dives: a dive whose lane wins has its own close calls revisited.
 DIVE_ROUNDS = 3
+#: After the dives, drop the outward detours of the winner that RLD's objective prefers
+#: without (``clc.search.drop_detours``; ``lane.stats["dropped"]``).
+DROP_DETOURS = True
 
 
 def _match(prev_xy: np.ndarray, tree: cKDTree) -> np.ndarray:
@@ -215,6 +225,10 @@ class ClcModel:
                 points, pose, res, (left, right, closed, score))
             iterations += it
         stats.update(dives=n_dives, dive_rounds=rounds, iterations=iterations)
+        stats["dropped"] = 0
+        if not res.complete and not closed and DROP_DETOURS:
+            left, right, stats["dropped"] = drop_detours(points, pose, self.params, res.graph,
+                                                         left, right, DIVE_REACH_M)
         if not closed and closable(res.graph, left, right):
             closed = lane_is_feasible(points[left], points[right], self.params, closed=True)
         self._prev = (points[left].copy(), points[right].copy())

@@ -18,10 +18,17 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from clc import search_kernels as sk
-from clc.search import closable, contested_dives, enumerate_candidates, search_graph
+from clc.search import (
+    DUPLICATE_M,
+    closable,
+    contested_dives,
+    drop_detours,
+    enumerate_candidates,
+    search_graph,
+)
 from rld import LaneParams, LaneSolver, LaneStatus, Pose, solve_lane
 from rld.constraints import c_seg, find_starting_vertices, lane_is_feasible
-from rld.costs import ranking_features
+from rld.costs import lane_cost, ranking_features
 
 PARAMS = LaneParams()
 POSE = Pose(0.0, 0.0, 0.0)
@@ -224,6 +231,82 @@ def test_skipped_positions_hand_worked():
     assert positions(0.5, path=np.arange(6)) == [4]
     assert positions(5.0, path=R, other=np.arange(6)) == [4]  # the cone at 1.3, 3.05 m off
     assert positions(0.5, path=R, other=np.arange(6)) == []
+
+
+def _detour_lane():
+    """A straight lane 3.5 m wide, cones 3.5 m apart, whose right boundary detours through a
+    false positive 1.2 m outside the line, midway between its third and fourth cones."""
+    xs = np.arange(7) * 3.5
+    left = np.column_stack([xs, np.full(7, 1.75)])
+    right = np.column_stack([xs, np.full(7, -1.75)])
+    pts = np.vstack([left, right, [[8.75, -2.95]]])
+    L = np.arange(7)
+    R = np.array([7, 8, 9, 14, 10, 11, 12, 13])
+    return pts, L, R
+
+
+def test_detour_positions_hand_worked():
+    pts, L, R = _detour_lane()
+    g = search_graph(pts, PARAMS)
+
+    def positions(path, side, reach=100.0, min_step=1.0):
+        return sk.detour_positions(pts, g.indptr, g.indices, path, side, reach,
+                                   min_step).tolist()
+
+    # Only the false positive bends the right side outward (a left turn on the right side);
+    # the cones beside it turn the other way, the straight cones not at all.
+    assert positions(R, 1) == [3]
+    assert positions(R, 0) == [2, 4]  # read as a left side, its neighbours bend outward
+    assert positions(L, 0) == [] and positions(L, 1) == []
+    assert positions(R, 1, reach=7.0) == []  # the detour cone lies 9.1 m along the path
+    assert positions(R, 1, min_step=2.5) == []  # its edges are 2.12 m long
+    # No search-graph edge joins the neighbours: not a position.
+    far = np.array([7, 8, 9, 14, 11, 12, 13])  # 14 -> 11 skips 10; 9 -> 11 is 7 m
+    assert positions(far, 1) == []
+
+
+def test_drop_detours_drops_the_false_positive():
+    pts, L, R = _detour_lane()
+    g = search_graph(pts, PARAMS)
+    before = lane_cost(pts, L, R, POSE, PARAMS)
+    left, right, n = drop_detours(pts, POSE, PARAMS, g, L, R, 25.0)
+    assert n == 1 and left.tolist() == L.tolist() and right.tolist() == list(range(7, 14))
+    # By hand: the detour's two 2.12 m edges cost ((2.12 - 3.5) / 2.2)^4 = 0.155 each, its
+    # turns of 34.4, 68.9 and 34.4 deg (x / 0.7 rad)^4 = 0.54 + 8.71 + 0.54, less the
+    # benefit of its extra edge, w_b = 2.5: 7.59 (the heading terms 9 m ahead are < 0.001).
+    assert before - lane_cost(pts, left, right, POSE, PARAMS) == pytest.approx(7.594, abs=0.005)
+    # Out of reach, or nothing to gain: unchanged.
+    assert drop_detours(pts, POSE, PARAMS, g, L, R, 5.0)[2] == 0
+    assert drop_detours(pts, POSE, PARAMS, g, L, np.arange(7, 14), 25.0)[2] == 0
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(8, 14))
+def test_drop_detours_is_a_fixed_point_of_cheaper_feasible_drops(seed, n):
+    """Brute force: after drop_detours, no single eligible cone can be dropped for a cheaper
+    lane that satisfies the predicates, the lane is no dearer and still feasible, and only
+    cones were removed (order kept)."""
+    pts = lane_instance(seed, n)
+    res = enumerate_candidates(pts, POSE, PARAMS, max_iterations=0)
+    if len(res.candidates) == 0:
+        return
+    L, R, _ = res.candidates[len(res.candidates) - 1]
+    if not lane_is_feasible(pts[L], pts[R], PARAMS):
+        return
+    left, right, k = drop_detours(pts, POSE, PARAMS, res.graph, L, R, 100.0, max_drops=10)
+    assert lane_is_feasible(pts[left], pts[right], PARAMS)
+    assert lane_cost(pts, left, right, POSE, PARAMS) <= lane_cost(pts, L, R, POSE, PARAMS)
+    assert k == (L.size - left.size) + (R.size - right.size)
+    for new, old in ((left, L), (right, R)):
+        assert [v for v in old.tolist() if v in set(new.tolist())] == new.tolist()
+    cost = lane_cost(pts, left, right, POSE, PARAMS)
+    for side, path in ((0, left), (1, right)):
+        for j in sk.detour_positions(pts, res.graph.indptr, res.graph.indices, path, side,
+                                     1e9, DUPLICATE_M).tolist():
+            trial = [left, right]
+            trial[side] = np.delete(path, j)
+            if lane_is_feasible(pts[trial[0]], pts[trial[1]], PARAMS):
+                assert lane_cost(pts, trial[0], trial[1], POSE, PARAMS) >= cost - 1e-9
 
 
 @settings(max_examples=60, deadline=None)
@@ -534,6 +617,25 @@ def test_skipped_cone_dive_mends_track3(dataset_dir):
         lane = LaneSolver("clc", params=LaneParams(skipped_cone_m=tol)).solve(f.cones, f.pose)
         s = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
         assert s.critical_tolerant is critical
+
+
+def test_drop_detours_mends_track6(dataset_dir, monkeypatch):
+    """Track 6 at R = 30 m, 10 % false positives, pose 35: the right boundary detours through
+    a false positive 1.1 m off the line between two true cones 12 m ahead (the decider ranked
+    it first, no close call flagged it). Dropping it lowers RLD's objective by 2.55 and the
+    lane no longer diverges before 20 m (tolerant rule)."""
+    import clc.solver
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    lap = simulate_lap(load_dataset_track(dataset_dir, 6), range_m=30.0, fp_rate=0.1, seed=0)
+    f = lap.frame(35)
+    for flag, critical in ((False, True), (True, False)):
+        monkeypatch.setattr(clc.solver, "DROP_DETOURS", flag)
+        lane = LaneSolver("clc").solve(f.cones, f.pose)
+        s = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
+        assert s.critical_tolerant is critical
+        assert lane.stats.get("dropped", 0) == int(flag)
 
 
 def _pick(ranker, pts, params, res):
