@@ -15,6 +15,7 @@ next-vertex and left-right deciders (section V) and, when warm-started, by the p
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -205,16 +206,13 @@ def enumerate_candidates(
 def _arc_behind(points: np.ndarray, path: np.ndarray, pose: Pose) -> float:
     """Path length (metres) of ``path`` behind the car: from its start to where it crosses
     the line through the car across its heading (the whole path when it never does; 0 when
-    it starts on or past the line). The part of a dive's reach that does not count."""
-    x = pose.to_local(points[path])[:, 0]
-    seg = np.hypot(*np.diff(points[path], axis=0).T)
-    ahead = np.flatnonzero(x >= 0.0)
-    if ahead.size == 0:
-        return float(seg.sum())
-    k = int(ahead[0])
-    if k == 0:
+    it starts on or past the line; ``search_kernels.arc_behind``). The part of a dive's reach
+    that does not count."""
+    path = np.ascontiguousarray(path, dtype=np.int64)
+    if path.size == 0:
         return 0.0
-    return float(seg[: k - 1].sum() + seg[k - 1] * (-x[k - 1]) / (x[k] - x[k - 1]))
+    return float(sk.arc_behind(points, path, float(pose.x), float(pose.y),
+                               math.cos(pose.yaw), math.sin(pose.yaw)))
 
 
 def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,

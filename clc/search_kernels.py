@@ -278,6 +278,26 @@ def detour_positions(pts, adj_ptr, adj_idx, path, side, reach, min_step):
 
 
 @njit(cache=True)
+def arc_behind(pts, path, px, py, hx, hy):
+    """Path length (metres) of ``path`` behind the car at (px, py) with unit heading (hx, hy):
+    from its start to where it crosses the line through the car across the heading (the whole
+    path when it never does; 0 when it starts on or past the line)."""
+    total = 0.0
+    prev = (pts[path[0], 0] - px) * hx + (pts[path[0], 1] - py) * hy
+    if prev >= 0.0:
+        return 0.0
+    for j in range(1, path.shape[0]):
+        a, b = path[j - 1], path[j]
+        seg = math.hypot(pts[b, 0] - pts[a, 0], pts[b, 1] - pts[a, 1])
+        x = (pts[b, 0] - px) * hx + (pts[b, 1] - py) * hy
+        if x >= 0.0:
+            return total + seg * (-prev) / (x - prev)
+        total += seg
+        prev = x
+    return total
+
+
+@njit(cache=True)
 def _has_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn):
     """Whether the path's end has any untried, unused neighbour within the turn limit."""
     c = path[n - 1]

@@ -184,6 +184,27 @@ def test_dive_reach_counts_from_the_car():
     assert _arc_behind(pts, np.arange(3, -1, -1), turned) == pytest.approx(3.5 + 2.0)
 
 
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(1, 8), yaw=st.floats(-math.pi, math.pi))
+def test_arc_behind_matches_a_numpy_reference(seed, n, yaw):
+    from clc.search import _arc_behind
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(-10, 10, size=(n, 2))
+    pose = Pose(float(rng.uniform(-2, 2)), float(rng.uniform(-2, 2)), yaw)
+    path = rng.permutation(n)
+    x = pose.to_local(pts[path])[:, 0]
+    seg = np.hypot(*np.diff(pts[path], axis=0).T)
+    ahead = np.flatnonzero(x >= 0.0)
+    if ahead.size == 0:
+        want = float(seg.sum())
+    elif ahead[0] == 0:
+        want = 0.0
+    else:
+        k = int(ahead[0])
+        want = float(seg[: k - 1].sum() + seg[k - 1] * (-x[k - 1]) / (x[k] - x[k - 1]))
+    assert _arc_behind(pts, path, pose) == pytest.approx(want, rel=1e-9, abs=1e-9)
+
+
 def test_contested_positions_hand_worked():
     """A straight left boundary with one cone 0.15 m off the line beside its third cone: the
     decider's choice at position 2 has a close second (the off-line cone), nowhere else."""
