@@ -59,6 +59,18 @@ DIVE_ROUNDS = 3
 #: After the dives, drop the outward detours of the winner that RLD's objective prefers
 #: without (``clc.search.drop_detours``; ``lane.stats["dropped"]``).
 DROP_DETOURS = True
+#: The runner-up start pairs (``LaneParams.start_pairs``) are searched while the best
+#: candidate so far has fewer than this many cones on its shorter side; the deepest wins (ties:
+#: the more symmetric pair).
+MIN_START_DEPTH = 5
+
+
+def _depth(res) -> int:
+    """The most cones the shorter boundary of any candidate has (0: no candidate)."""
+    if not res.candidates:
+        return 0
+    _, lp, _, rp, _ = res.candidates.flat()
+    return int(np.minimum(np.diff(lp), np.diff(rp)).max())
 
 
 def _match(prev_xy: np.ndarray, tree: cKDTree) -> np.ndarray:
@@ -193,12 +205,14 @@ class ClcModel:
             res = self._split_search(points, pose, start, guide)
         # No feasible path pair from the best start pair: the runners-up, one at a time
         # (LaneParams.start_pairs), each with a fresh search.
-        fallbacks, iterations = 0, res.iterations
-        for other in pairs[1:]:
-            if res.candidates:
+        fallbacks, chosen, iterations = 0, 0, res.iterations
+        for rank, other in enumerate(pairs[1:], start=1):
+            if _depth(res) >= MIN_START_DEPTH:
                 break
-            res = enumerate_candidates(points, pose, self.params, graph=res.graph, start=other)
-            fallbacks, iterations = fallbacks + 1, iterations + res.iterations
+            nxt = enumerate_candidates(points, pose, self.params, graph=res.graph, start=other)
+            fallbacks, iterations = fallbacks + 1, iterations + nxt.iterations
+            if _depth(nxt) > _depth(res):
+                res, chosen = nxt, rank
         stats["start_fallbacks"] = fallbacks
         stats.update(iterations=iterations, complete=res.complete,
                      n_candidates=len(res.candidates), n_cones_used=int(points.shape[0]))
@@ -238,8 +252,8 @@ class ClcModel:
         status = LaneStatus.OPTIMAL if res.complete else LaneStatus.FEASIBLE
         message = ("every feasible path pair was enumerated" if res.complete else
                    f"the search stopped at it_max = {self.params.max_iterations} iterations")
-        if fallbacks:
-            message += (f"; from start pair {fallbacks + 1} by symmetry (the better ones had "
-                        "no feasible path pair)")
+        if chosen:
+            message += (f"; from start pair {chosen + 1} by symmetry (the better ones had no "
+                        f"feasible path pair with {MIN_START_DEPTH} cones a side)")
         return Lane(cones=points, left=left, right=right, status=status, message=message,
                     cost=score, closed=bool(closed), stats=stats)

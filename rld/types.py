@@ -240,8 +240,10 @@ class LaneParams:
     %), 1.0 was worse at 30 %."""
     start_pairs: int = 4
     """How many start pairs CLC tries, most symmetric first (IV-C), when a pair has no feasible
-    path pair: the search runs from the next one instead of returning no lane (our addition;
-    1 is the paper's single pair). Measured 2026-12-01 on the six shared tracks (R = 50 m,
+    path pair with ``clc.solver.MIN_START_DEPTH`` (5) cones a side: the search runs from the
+    next one and the deepest pair's candidates are ranked, instead of returning no lane or a
+    stub (our addition; 1 is the paper's single pair; the depth rule since 2026-12-02,
+    docs/clc.md). Measured 2026-12-01 on the six shared tracks (R = 50 m,
     every 2nd pose, learned ranker), tolerant critical %: 1.7 / 3.8 / 8.1 / 20.3 with 1 ->
     1.7 / 3.3 / 7.7 / 19.9 with 4 at 0 / 10 / 30 / 50 % false positives, the "no lane" poses
     3 / 3 / 6 -> 0 at 10 / 30 / 50 %. Searching from several pairs and ranking all their

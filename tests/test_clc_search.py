@@ -659,6 +659,27 @@ def test_drop_detours_mends_track6(dataset_dir, monkeypatch):
         assert lane.stats.get("dropped", 0) == int(flag)
 
 
+def test_shallow_start_pair_falls_back_to_a_deeper_one(dataset_dir, monkeypatch):
+    """Track 3 at R = 50 m, no false positives, pose 20: the most symmetric start pair joins an
+    unlabelled cone inside the lane to a true right cone, and its best path pair has 2 and 1
+    cones. The runner-up pairs are searched while the best candidate has fewer than
+    MIN_START_DEPTH cones a side, and the deepest wins: the true start, 17 and 16 cones."""
+    import clc.solver
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    lap = simulate_lap(load_dataset_track(dataset_dir, 3), range_m=50.0, fp_rate=0.0, seed=0)
+    f = lap.frame(20)
+    for depth, critical in ((1, True), (clc.solver.MIN_START_DEPTH, False)):
+        monkeypatch.setattr(clc.solver, "MIN_START_DEPTH", depth)
+        lane = LaneSolver("clc").solve(f.cones, f.pose)
+        s = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
+        assert s.critical_tolerant is critical
+        assert (lane.stats["start_fallbacks"] >= 1) is (not critical)
+        assert ("start pair" in lane.message) is (not critical)
+    assert min(lane.left.size, lane.right.size) >= clc.solver.MIN_START_DEPTH
+
+
 def _pick(ranker, pts, params, res):
     s = ranker.score(pts, POSE, params, res.candidates, res.features)
     a, b, _ = res.candidates[int(np.argmax(s))]
