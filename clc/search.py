@@ -41,11 +41,19 @@ DUPLICATE_M = 1.0
 @dataclass(frozen=True)
 class SearchGraph:
     """The undirected search graph in CSR form: the neighbours of cone v are
-    ``indices[indptr[v]:indptr[v + 1]]``, sorted by index."""
+    ``indices[indptr[v]:indptr[v + 1]]``, sorted by index. ``longest_m``: its longest edge
+    (metres), which sets the next-vertex decider's dead-end score."""
 
     edges: np.ndarray
     indptr: np.ndarray
     indices: np.ndarray
+    longest_m: float = 0.0
+
+    def dead_end(self, params: LaneParams) -> float:
+        """The look-ahead's score of a cone with no step onward (``search_kernels.
+        dead_end_score``): phi_max + the decider's distance weight times the longest edge."""
+        return float(params.max_turn_angle_rad) + float(params.nvd_distance_weight) * \
+            self.longest_m
 
     def neighbours(self, v: int) -> np.ndarray:
         return self.indices[self.indptr[v]: self.indptr[v + 1]]
@@ -73,7 +81,8 @@ def search_graph(points: np.ndarray, params: LaneParams, kind: str = "radius") -
     indptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(both[:, 0], minlength=n), out=indptr[1:])
     indices = np.ascontiguousarray(both[:, 1], dtype=np.int64)
-    return SearchGraph(edges=edges, indptr=indptr, indices=indices)
+    return SearchGraph(edges=edges, indptr=indptr, indices=indices,
+                       longest_m=float(sk.dead_end_score(points, indptr, indices, 0.0, 1.0)))
 
 
 def _delaunay_edges(points: np.ndarray, max_len: float) -> np.ndarray:
@@ -184,7 +193,7 @@ def enumerate_candidates(
         float(params.nvd_lookahead_weight), int(it_max), np.ascontiguousarray(gl, dtype=np.int64),
         np.ascontiguousarray(gr, dtype=np.int64),
         np.zeros(0, np.int64) if banned is None else np.ascontiguousarray(banned, dtype=np.int64),
-        int(forbid[0]), int(forbid[1]))
+        int(forbid[0]), int(forbid[1]), g.dead_end(params))
     cands = CandidateList(lf, lp, rf, rp)
     features = feats
     if close_loops:
@@ -243,7 +252,8 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
         pos = sk.contested_positions(points, graph.indptr, graph.indices, path, other, hx, hy,
                                      float(params.max_turn_angle_rad),
                                      float(params.nvd_distance_weight),
-                                     float(params.nvd_lookahead_weight), float(margin), reach)
+                                     float(params.nvd_lookahead_weight), float(margin), reach,
+                                     graph.dead_end(params))
         if params.skipped_cone_m > 0:
             pos = np.union1d(pos, sk.skipped_positions(points, graph.indptr, graph.indices, path,
                                                        other, float(params.skipped_cone_m),

@@ -171,14 +171,16 @@ def dead_end_score(pts, adj_ptr, adj_idx, max_turn, dist_weight):
 
 @njit(cache=True)
 def contested_positions(pts, adj_ptr, adj_idx, path, other, hx, hy, max_turn, dist_weight,
-                        lookahead, margin, reach):
+                        lookahead, margin, reach, dead_end=-1.0):
     """Positions j >= 1 of ``path`` (one boundary of a lane, ``other`` the other one) within
     ``reach`` metres of path length from its start at which the next-vertex decider had a
     close second: another option of path[:j] (not in either boundary, within the turn limit)
     whose ``_option_score`` is at most ``margin`` above that of path[j]. Returns the
-    positions in order."""
+    positions in order. ``dead_end``: ``dead_end_score`` of the graph when known (< 0: computed
+    here)."""
     N = pts.shape[0]
-    dead_end = dead_end_score(pts, adj_ptr, adj_idx, max_turn, dist_weight)
+    if dead_end < 0.0:
+        dead_end = dead_end_score(pts, adj_ptr, adj_idx, max_turn, dist_weight)
     in_path = np.zeros(N, dtype=np.bool_)
     for v in other:
         in_path[v] = True
@@ -682,7 +684,7 @@ def _grow_rows(a, need):
 @njit(cache=True)
 def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, wmin, wmax,
                     dist_weight, lookahead, max_iterations, guide_l, guide_r, banned,
-                    forbid_l=-1, forbid_r=-1):
+                    forbid_l=-1, forbid_r=-1, dead_end=-1.0):
     """CLC Alg. 2: enumerate the path pairs from (start_l, start_r) that satisfy CD (eq. 6).
 
     ``pts`` (N, 2) float64 metres; ``adj_ptr`` (N+1,), ``adj_idx`` the search graph in CSR form
@@ -694,7 +696,8 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     (may be empty) the search follows first; ``banned`` vertices (may be empty) are in no
     path; ``forbid_l`` (``forbid_r``, -1: none) is not the next left (right) vertex right
     after the whole left (right) guide, but may come later (the contested-choice dives of
-    ``clc.search``).
+    ``clc.search``); ``dead_end`` the graph's ``dead_end_score`` when known (< 0: computed
+    here).
 
     Returns ``(left_flat, left_ptr, right_flat, right_ptr, features, iterations, complete)``:
     candidate k's left boundary is ``left_flat[left_ptr[k]:left_ptr[k+1]]`` (likewise right),
@@ -703,7 +706,8 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     options before the limit.
     """
     N = pts.shape[0]
-    dead_end = dead_end_score(pts, adj_ptr, adj_idx, max_turn, dist_weight)
+    if dead_end < 0.0:
+        dead_end = dead_end_score(pts, adj_ptr, adj_idx, max_turn, dist_weight)
     maxdeg = 1
     for v in range(N):
         d = adj_ptr[v + 1] - adj_ptr[v]

@@ -205,6 +205,20 @@ def test_arc_behind_matches_a_numpy_reference(seed, n, yaw):
     assert _arc_behind(pts, path, pose) == pytest.approx(want, rel=1e-9, abs=1e-9)
 
 
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(2, 14))
+def test_graph_dead_end_equals_the_kernels(seed, n):
+    """The dead-end score kept with the graph (computed once per map) is the kernels' own,
+    bit for bit, so passing it changes no choice of the search."""
+    pts = lane_instance(seed, max(n, 6))
+    g = search_graph(pts, PARAMS)
+    want = sk.dead_end_score(pts, g.indptr, g.indices, PARAMS.max_turn_angle_rad,
+                             PARAMS.nvd_distance_weight)
+    assert g.dead_end(PARAMS) == want
+    lengths = np.hypot(*(pts[g.edges[:, 0]] - pts[g.edges[:, 1]]).T) if g.edges.size else [0.0]
+    assert g.longest_m == pytest.approx(float(np.max(lengths)), abs=1e-12)
+
+
 def test_contested_positions_hand_worked():
     """A straight left boundary with one cone 0.15 m off the line beside its third cone: the
     decider's choice at position 2 has a close second (the off-line cone), nowhere else."""
