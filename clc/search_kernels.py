@@ -43,6 +43,7 @@ import numpy as np
 from numba import njit
 
 from rld.geometry_kernels import (
+    orient,
     point_segment_distance,
     point_segment_param,
     segment_distance,
@@ -267,8 +268,8 @@ def detour_positions(pts, adj_ptr, adj_idx, path, side, reach, min_step):
         s2 = math.hypot(pts[c, 0] - pts[b, 0], pts[c, 1] - pts[b, 1])
         if s1 < min_step or s2 < min_step:
             continue
-        cr = ((pts[b, 0] - pts[a, 0]) * (pts[c, 1] - pts[b, 1])
-              - (pts[b, 1] - pts[a, 1]) * (pts[c, 0] - pts[b, 0]))
+        # The shared orientation test: > 0 when a -> b -> c turns left.
+        cr = orient(pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1], pts[c, 0], pts[c, 1])
         if (side == 0 and cr >= 0.0) or (side == 1 and cr <= 0.0):
             continue
         for s in range(adj_ptr[a], adj_ptr[a + 1]):
