@@ -321,10 +321,13 @@ def lane_is_feasible(left: np.ndarray, right: np.ndarray, params, closed: bool =
 
 
 def starting_vertex_pairs(
-    points: np.ndarray, pose: Pose, radius_m: float, k: int = 1
+    points: np.ndarray, pose: Pose, radius_m: float, k: int = 1, min_width_m: float = 0.0
 ) -> list[tuple[int, int]]:
     """The ``k`` best (left, right) start pairs of CLC's ``find_starting_vertices`` (IV-C),
-    best first (see there); fewer when fewer pairs exist, none when a side has no candidate."""
+    best first (see there); fewer when fewer pairs exist, none when a side has no candidate.
+    Pairs whose two cones are less than ``min_width_m`` apart (metres) come after every wider
+    pair, in the same order among themselves (our addition, ``LaneParams.start_min_width_m``;
+    0, the default, is the paper's order)."""
     near = np.flatnonzero(near_car_mask(points, pose, radius_m))
     if near.size < 2:
         return []
@@ -335,10 +338,13 @@ def starting_vertex_pairs(
     ll, rl = local[local[:, 1] > 0], local[local[:, 1] < 0]
     asym = np.hypot(ll[:, None, 0] - rl[None, :, 0], ll[:, None, 1] + rl[None, :, 1])
     reach = np.hypot(ll[:, 0], ll[:, 1])[:, None] + np.hypot(rl[:, 0], rl[:, 1])[None, :]
+    narrow = np.hypot(ll[:, None, 0] - rl[None, :, 0],
+                      ll[:, None, 1] - rl[None, :, 1]) < float(min_width_m)
     li, ri = np.meshgrid(lefts, rights, indexing="ij")
-    # Most symmetric first; among equals (to a micrometre) the pair nearest the car, then the
-    # lowest indices, so the choice does not depend on the order of the input.
-    order = np.lexsort((ri.ravel(), li.ravel(), reach.ravel(), np.round(asym.ravel(), 6)))
+    # Wide enough first; then most symmetric; among equals (to a micrometre) the pair nearest
+    # the car, then the lowest indices, so the choice does not depend on the order of the input.
+    order = np.lexsort((ri.ravel(), li.ravel(), reach.ravel(), np.round(asym.ravel(), 6),
+                        narrow.ravel()))
     return [(int(li.ravel()[q]), int(ri.ravel()[q])) for q in order[: max(int(k), 1)]]
 
 

@@ -119,10 +119,18 @@ def test_clc_tries_the_runner_up_start_pair_when_the_best_leads_nowhere():
     right = np.column_stack([xs + 1.75, np.full(8, -2.0)])
     cones = np.vstack([left, right, [[0.2, -0.3]]])
     pose = Pose(0.0, 0.0, 0.0)
-    lane = solve_lane(cones, pose, method="clc", params=LaneParams(start_pairs=1))
+    # In the paper's order (start_min_width_m 0) the 2.3 m pair comes first.
+    lane = solve_lane(cones, pose, method="clc",
+                      params=LaneParams(start_pairs=1, start_min_width_m=0.0))
     assert lane.status == LaneStatus.NOT_FOUND
-    lane = solve_lane(cones, pose, method="clc")
+    lane = solve_lane(cones, pose, method="clc", params=LaneParams(start_min_width_m=0.0))
     assert lane.ok and lane.stats["start_fallbacks"] == 1
     assert lane.left.tolist() == list(range(8)) and lane.right.tolist() == list(range(8, 16))
+    # By default pairs narrower than 3 m go last: the true pair is searched first.
+    for params in (LaneParams(), LaneParams(start_pairs=1)):
+        lane = solve_lane(cones, pose, method="clc", params=params)
+        assert lane.ok and lane.stats["start_fallbacks"] == 0
+        assert lane.left.tolist() == list(range(8))
+        assert lane.right.tolist() == list(range(8, 16))
     with pytest.raises(ValueError, match="start_pairs"):
         LaneParams(start_pairs=0)

@@ -478,14 +478,23 @@ def test_too_narrow_start_is_not_found():
     pts = np.array([[0.0, 0.5], [1.0, 0.5], [0.0, -0.5], [1.0, -0.5]])
     lane = solve_lane(pts, (0.0, 0.0, 0.0), method="clc", ranker="longest")
     assert not lane.ok and lane.status is LaneStatus.NOT_FOUND
-    # With the paper's single start pair the most symmetric one decides, even when a wider
-    # runner-up exists (here (0, 0.5) with (3, -0.5), 3.2 m apart).
+    # With the paper's single start pair (and order) the most symmetric one decides, even when
+    # a wider runner-up exists (here (0, 0.5) with (3, -0.5), 3.2 m apart).
     pts = np.array([[0.0, 0.5], [3.0, 0.5], [0.0, -0.5], [3.0, -0.5]])
-    lane = solve_lane(pts, (0.0, 0.0, 0.0), method="clc", ranker="longest",
-                      params=LaneParams(start_pairs=1))
+    paper = LaneParams(start_pairs=1, start_min_width_m=0.0)
+    lane = solve_lane(pts, (0.0, 0.0, 0.0), method="clc", ranker="longest", params=paper)
     assert not lane.ok and lane.status is LaneStatus.NOT_FOUND
-    lane = solve_lane(pts, (0.0, 0.0, 0.0), method="clc", ranker="longest")
+    # Several pairs in the paper's order: the runner-up is searched after the first fails.
+    lane = solve_lane(pts, (0.0, 0.0, 0.0), method="clc", ranker="longest",
+                      params=LaneParams(start_min_width_m=0.0))
     assert lane.ok and lane.stats["start_fallbacks"] >= 1 and "start pair" in lane.message
+    # The defaults put the 1 m pairs after the 3.2 m ones: that pair is searched first and
+    # wins (no runner-up is deeper), with one start pair too.
+    for params in (LaneParams(), LaneParams(start_pairs=1)):
+        lane = solve_lane(pts, (0.0, 0.0, 0.0), method="clc", ranker="longest", params=params)
+        assert lane.ok and "start pair" not in lane.message
+        assert np.hypot(*(pts[lane.left[0]] - pts[lane.right[0]])) > 3.0
+    assert lane.stats["start_fallbacks"] == 0
 
 
 def test_warm_start_follows_the_previous_lane():
@@ -684,9 +693,10 @@ def test_shallow_start_pair_falls_back_to_a_deeper_one(dataset_dir, monkeypatch)
     from rld.tracks import load_dataset_track
     lap = simulate_lap(load_dataset_track(dataset_dir, 3), range_m=50.0, fp_rate=0.0, seed=0)
     f = lap.frame(20)
+    paper_order = LaneParams(start_min_width_m=0.0)  # the depth rule alone
     for depth, critical in ((1, True), (clc.solver.MIN_START_DEPTH, False)):
         monkeypatch.setattr(clc.solver, "MIN_START_DEPTH", depth)
-        lane = LaneSolver("clc").solve(f.cones, f.pose)
+        lane = LaneSolver("clc", params=paper_order).solve(f.cones, f.pose)
         s = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
         assert s.critical_tolerant is critical
         assert (lane.stats["start_fallbacks"] >= 1) is (not critical)
@@ -698,3 +708,23 @@ def _pick(ranker, pts, params, res):
     s = ranker.score(pts, POSE, params, res.candidates, res.features)
     a, b, _ = res.candidates[int(np.argmax(s))]
     return a, b
+
+
+def test_narrow_start_pair_comes_last_track4(dataset_dir):
+    """Track 4 at R = 50 m, 30 % false positives, pose 184: two false positives 2.6 m apart,
+    1.3 m either side of the car's line, are the most symmetric start pair, and the lane
+    starts with them (critical under the tolerant rule too: they lie 1 m inside the true
+    lines). Pairs narrower than the rules' 3 m go last, and the lane starts at true cones."""
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    lap = simulate_lap(load_dataset_track(dataset_dir, 4), range_m=50.0, fp_rate=0.3, seed=0)
+    f = lap.frame(184)
+    for width, critical in ((0.0, True), (PARAMS.start_min_width_m, False)):
+        lane = LaneSolver("clc", params=LaneParams(start_min_width_m=width)).solve(f.cones,
+                                                                                 f.pose)
+        s = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
+        assert s.critical_tolerant is critical
+        # Frame.source: negative for a false positive.
+        starts_false = f.source[lane.left[0]] < 0 or f.source[lane.right[0]] < 0
+        assert bool(starts_false) is critical

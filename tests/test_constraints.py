@@ -444,3 +444,20 @@ def test_starting_vertex_pairs_hand_worked():
     assert C.starting_vertex_pairs(pts, CAR, 4.5, 10) == [(0, 1), (2, 1), (0, 3), (2, 3)]
     assert C.starting_vertex_pairs(pts, CAR, 4.5) == [C.find_starting_vertices(pts, CAR, 4.5)]
     assert C.starting_vertex_pairs(pts[[0, 2]], CAR, 4.5, 3) == []
+
+
+def test_starting_vertex_pairs_narrow_pairs_come_last():
+    # Left cones 0 and 2, right cones 1 and 3 (car frame, metres). Widths by hand: (0, 1) 2.6,
+    # (0, 3) 3.55, (2, 1) 3.51, (2, 3) 4.42; asymmetries |mirror(left) - right|: (0, 1) 0,
+    # (2, 3) 0.4, (2, 1) 0.92, (0, 3) 1.08. Pair (0, 1) is the track-4 case: two false
+    # positives 1.3 m either side of the car's line, more symmetric than the true start.
+    pts = np.array([[1.0, 1.3], [1.0, -1.3], [1.2, 2.2], [1.6, -2.2]], float)
+    assert C.starting_vertex_pairs(pts, CAR, 4.5, 4) == [(0, 1), (2, 3), (2, 1), (0, 3)]
+    # Narrow pairs go last, each group in the order of symmetry.
+    assert C.starting_vertex_pairs(pts, CAR, 4.5, 4, min_width_m=3.0) == [
+        (2, 3), (2, 1), (0, 3), (0, 1)]
+    assert C.starting_vertex_pairs(pts, CAR, 4.5, 4, min_width_m=3.53) == [
+        (2, 3), (0, 3), (0, 1), (2, 1)]
+    # Every pair narrow: the paper's order again.
+    assert C.starting_vertex_pairs(pts, CAR, 4.5, 4, min_width_m=5.0) == \
+        C.starting_vertex_pairs(pts, CAR, 4.5, 4)
