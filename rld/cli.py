@@ -218,14 +218,16 @@ def train_ranker(n_generated: int, train_tracks: str, fp_rates: str, ranges: str
 @click.option("--ranges", default="30,50", show_default=True, help="Perception ranges, metres.")
 @click.option("--fp-rates", default="0,0.1,0.3,0.5", show_default=True)
 @click.option("--every", default=1, show_default=True, help="Every k-th pose of each lap.")
-@click.option("--seed", default=0, show_default=True, help="Seed of the false positives.")
+@click.option("--seed", default="0", show_default=True,
+              help="Seed of the false positives, or several, comma-separated (0,1,2): the "
+                   "tables pool them and a table gives each seed's critical rates.")
 @click.option("--processes", default=None, type=int, help="Workers (default: CPU count).")
 @click.option("--out", default="eval_out", show_default=True, help="Output folder.")
 @click.option("--plot-failures", is_flag=True, help="Draw every critical failure.")
 @click.option("--results", "results_page", default=None,
               help="Also write the results page (docs/results.md) here.")
 def eval_cmd(dataset: str | None, methods: str, track_ids: str | None, n_generated: int,
-             ranges: str, fp_rates: str, every: int, seed: int, processes: int | None, out: str,
+             ranges: str, fp_rates: str, every: int, seed: str, processes: int | None, out: str,
              plot_failures: bool, results_page: str | None) -> None:
     """Run the evaluation protocol (DESIGN.md) and write records, tables and plots."""
     import datetime
@@ -253,9 +255,14 @@ def eval_cmd(dataset: str | None, methods: str, track_ids: str | None, n_generat
         raise click.ClickException("no tracks: give a dataset folder (or put the dataset in "
                                    "../shared/data/...) or --generated N")
     try:
+        seeds = [int(v) for v in seed.split(",") if v.strip()]
+    except ValueError as exc:
+        raise click.BadParameter(f"seeds are integers, got {seed!r}",
+                                 param_hint="--seed") from exc
+    try:
         records = report.evaluate(
             tracks, specs, ranges=[float(v) for v in ranges.split(",")],
-            fp_rates=[float(v) for v in fp_rates.split(",")], every=every, seed=seed,
+            fp_rates=[float(v) for v in fp_rates.split(",")], every=every, seed=seeds,
             processes=processes,
             plot_failures=str(Path(out) / "failures") if plot_failures else None)
     except ValueError as exc:

@@ -59,6 +59,8 @@ class PoseRecord:
     """The same ratios for the tracked lane (``rld.tracker``, its confident control points)."""
     tracked_stability_10: float = math.nan
     tracked_stability_20: float = math.nan
+    seed: int = 0
+    """Seed of the lap's false positives (``simulate_lap``)."""
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -128,6 +130,7 @@ def run_protocol(
                 n_cones=int(frame.cones.shape[0]),
                 iterations=int(lane.stats.get("iterations", -1)),
                 complete=lane.stats.get("complete"),
+                seed=int(seed),
                 **stab,
             ))
             if plot_failures and sc.critical:

@@ -30,7 +30,7 @@ from rld.metrics import CATEGORIES
 from rld.tracks import Track
 
 __all__ = ["MethodSpec", "parse_method", "evaluate", "summaries", "table_markdown",
-           "stability_markdown",
+           "stability_markdown", "seeds_markdown",
            "write_outputs", "plot_summaries"]
 
 
@@ -84,11 +84,13 @@ def _job(spec: MethodSpec, track: Track, range_m: float, fp_rate: float, every: 
 
 
 def evaluate(tracks: Sequence[Track], specs: Sequence[MethodSpec], ranges=(30.0, 50.0),
-             fp_rates=(0.0, 0.1, 0.3, 0.5), every: int = 1, seed: int = 0,
+             fp_rates=(0.0, 0.1, 0.3, 0.5), every: int = 1, seed: int | Sequence[int] = 0,
              processes: int | None = None, progress: bool = True,
              plot_failures: str | None = None) -> list[PoseRecord]:
-    """Every (spec, track, range, rate) of the protocol; ``processes`` workers (default: the
-    CPU count). Records come back in a fixed order whatever the scheduling. A method that
+    """Every (spec, track, range, rate, seed) of the protocol; ``seed``: the false positives'
+    seed, or several (each a lap of its own; ``summaries`` pools them and keeps each seed's
+    critical rates). ``processes`` workers (default: the CPU count). Records come back in a
+    fixed order whatever the scheduling. A method that
     keeps its lane from call to call (``rld-incremental``) says how small ``every`` must be
     (its ``max_every``: 5, poses lie 1 m apart and a larger stride is a pose jump, which
     restarts it at every call)."""
@@ -102,18 +104,22 @@ def evaluate(tracks: Sequence[Track], specs: Sequence[MethodSpec], ranges=(30.0,
             raise ValueError(f"{s.method} is driven pose by pose: use every < {limit():g} "
                              f"(got {every}); a larger stride restarts it at every call")
 
-    jobs = [(s, t, r, fp) for s in specs for r in ranges for fp in fp_rates for t in tracks]
+    seeds = [int(seed)] if isinstance(seed, int | np.integer) else [int(v) for v in seed]
+    if not seeds or len(set(seeds)) != len(seeds):
+        raise ValueError(f"seeds must be distinct and at least one, got {seeds}")
+    jobs = [(s, t, r, fp, sd) for s in specs for r in ranges for fp in fp_rates for sd in seeds
+            for t in tracks]
     n = processes or os.cpu_count() or 1
     out: dict[int, list[dict]] = {}
     bar = tqdm(total=len(jobs), desc="rld eval", unit="lap", disable=not progress)
     if n <= 1:
-        for i, (s, t, r, fp) in enumerate(jobs):
-            out[i] = _job(s, t, r, fp, every, seed, plot_failures)
+        for i, (s, t, r, fp, sd) in enumerate(jobs):
+            out[i] = _job(s, t, r, fp, every, sd, plot_failures)
             bar.update(1)
     else:
         with ProcessPoolExecutor(max_workers=n) as pool:
-            futures = {pool.submit(_job, s, t, r, fp, every, seed, plot_failures): i
-                       for i, (s, t, r, fp) in enumerate(jobs)}
+            futures = {pool.submit(_job, s, t, r, fp, every, sd, plot_failures): i
+                       for i, (s, t, r, fp, sd) in enumerate(jobs)}
             for fut in as_completed(futures):
                 out[futures[fut]] = fut.result()
                 bar.update(1)
@@ -122,12 +128,39 @@ def evaluate(tracks: Sequence[Track], specs: Sequence[MethodSpec], ranges=(30.0,
 
 
 def summaries(records: Iterable[PoseRecord]) -> list[dict]:
-    """``summarize`` per (method, range, rate), in first-seen order."""
+    """``summarize`` per (method, range, rate), in first-seen order, over every seed's poses;
+    ``seeds`` lists the seeds (sorted), and ``critical_by_seed`` / ``critical_tolerant_by_seed``
+    each seed's critical rates in that order (%)."""
     groups: dict[tuple, list[PoseRecord]] = {}
     for r in records:
         groups.setdefault((r.method, r.range_m, r.fp_rate), []).append(r)
-    return [{"method": m, "range_m": rng, "fp_rate": fp, **summarize(recs)}
-            for (m, rng, fp), recs in groups.items()]
+    rows = []
+    for (m, rng, fp), recs in groups.items():
+        seeds = sorted({r.seed for r in recs})
+        per = [summarize([r for r in recs if r.seed == sd]) for sd in seeds]
+        rows.append({"method": m, "range_m": rng, "fp_rate": fp, **summarize(recs),
+                     "seeds": seeds, "critical_by_seed": [p["critical"] for p in per],
+                     "critical_tolerant_by_seed": [p["critical_tolerant"] for p in per]})
+    return rows
+
+
+def seeds_markdown(rows: list[dict]) -> str:
+    """Each seed's critical rates per method, range and false-positive rate, and their spread:
+    one seed's false positives are a few persistent configurations, each seen from many poses
+    in a row, so a single seed's rate moves by whole points from seed to seed. Empty when
+    every row has one seed."""
+    if all(len(r.get("seeds", [])) < 2 for r in rows):
+        return ""
+    parts = ["| method | R (m) | FP | seeds | critical % per seed | tolerant % per seed | "
+             "tolerant: all seeds (min - max) |", "|" + "---|" * 7]
+    for r in rows:
+        strict = " / ".join(f"{v:.2f}" for v in r["critical_by_seed"])
+        tol = r["critical_tolerant_by_seed"]
+        parts.append(f"| {r['method']} | {r['range_m']:g} | {r['fp_rate']:.0%} | "
+                     f"{', '.join(str(v) for v in r['seeds'])} | {strict} | "
+                     f"{' / '.join(f'{v:.2f}' for v in tol)} | {r['critical_tolerant']:.2f} "
+                     f"({min(tol):.2f} - {max(tol):.2f}) |")
+    return "\n".join(parts) + "\n"
 
 
 def table_markdown(rows: list[dict]) -> str:
@@ -284,7 +317,9 @@ def write_outputs(records: list[PoseRecord], folder: str | Path, header: str = "
     rows = summaries(records)
     (folder / "summary.json").write_text(
         json.dumps([{k: _clean(v) for k, v in r.items()} for r in rows], indent=1) + "\n")
+    spread = seeds_markdown(rows)
     md = ((header + "\n\n" if header else "") + table_markdown(rows)
+          + ("\n**Seeds**\n\n" + spread if spread else "")
           + "\n**Stability** (Huang et al. eq. 5)\n\n" + stability_markdown(rows))
     (folder / "results.md").write_text(md)
     plots = plot_summaries(rows, records, folder)
@@ -340,6 +375,11 @@ def results_page(rows: list[dict], header: str, images: Sequence[str] = ()) -> s
         *[f"![{Path(i).stem}]({i})" for i in images],
         "",
         table_markdown(rows),
+        *(["## Seeds", "",
+           "The figures above pool every seed's poses. One seed's false positives are a few",
+           "persistent configurations, each seen from many poses in a row, so a single seed's",
+           "critical rate moves by whole points from seed to seed:", "",
+           seeds_markdown(rows)] if seeds_markdown(rows) else []),
         "## Stability",
         "",
         "The average stability ratio of Huang et al. (2009, section 3.5, eq. 5) between",

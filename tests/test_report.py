@@ -10,9 +10,16 @@ import pytest
 from click.testing import CliRunner
 
 from rld.cli import main
-from rld.evaluation import run_protocol
+from rld.evaluation import run_protocol, summarize
 from rld.generator import generate_track
-from rld.report import MethodSpec, evaluate, parse_method, summaries, write_outputs
+from rld.report import (
+    MethodSpec,
+    evaluate,
+    parse_method,
+    seeds_markdown,
+    summaries,
+    write_outputs,
+)
 
 
 def test_parse_method():
@@ -61,6 +68,49 @@ def test_eval_command_on_a_generated_track(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     if summary[0]["critical"] > 0:
         assert any((out / "failures").iterdir())
+
+
+def test_several_seeds_are_pooled_and_each_kept(tmp_path):
+    track = generate_track(3)
+    spec = [parse_method("nearest")]
+    recs = evaluate([track], spec, ranges=(30.0,), fp_rates=(0.3,), every=20, seed=(0, 5),
+                    processes=1, progress=False)
+    by_seed = {sd: [r for r in recs if r.seed == sd] for sd in (0, 5)}
+    # Each seed's lap is the protocol's lap with that seed.
+    for sd, got in by_seed.items():
+        serial = run_protocol([track], method="nearest", range_m=30.0, fp_rate=0.3, every=20,
+                              seed=sd, stateful=True)
+        assert [(r.pose, r.category, r.n_cones) for r in got] == \
+            [(r.pose, r.category, r.n_cones) for r in serial]
+    # Different seeds put different false positives in the map.
+    assert [r.n_cones for r in by_seed[0]] != [r.n_cones for r in by_seed[5]]
+    (row,) = summaries(recs)
+    assert row["poses"] == len(recs) == sum(len(v) for v in by_seed.values())
+    assert row["seeds"] == [0, 5]
+    for key in ("critical", "critical_tolerant"):
+        assert row[f"{key}_by_seed"] == [summarize(by_seed[sd])[key] for sd in (0, 5)]
+        assert math.isclose(row[key], float(np.mean(row[f"{key}_by_seed"])))  # equal laps
+    md = seeds_markdown([row])
+    assert "| nearest | 30 | 30% | 0, 5 |" in md
+    # One seed: no seed table.
+    assert seeds_markdown(summaries(by_seed[0])) == ""
+    with pytest.raises(ValueError, match="distinct"):
+        evaluate([track], spec, ranges=(30.0,), fp_rates=(0.3,), every=20, seed=(1, 1),
+                 processes=1, progress=False)
+    text = write_outputs(recs, tmp_path / "out")["results"].read_text()
+    assert "**Seeds**" in text
+
+
+def test_eval_command_takes_several_seeds(tmp_path):
+    out = tmp_path / "ev"
+    res = CliRunner().invoke(main, [
+        "eval", str(tmp_path / "no-such-dataset"), "--generated", "1", "--methods", "nearest",
+        "--ranges", "30", "--fp-rates", "0.3", "--every", "50", "--processes", "1",
+        "--seed", "0,1", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert json.loads((out / "summary.json").read_text())[0]["seeds"] == [0, 1]
+    res = CliRunner().invoke(main, ["eval", "--generated", "1", "--seed", "0,x"])
+    assert res.exit_code != 0 and "seeds are integers" in res.output
 
 
 def test_eval_command_refuses_unknown_methods(tmp_path):
