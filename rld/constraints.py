@@ -336,10 +336,10 @@ def starting_vertex_pairs(
     if lefts.size == 0 or rights.size == 0:
         return []
     ll, rl = local[local[:, 1] > 0], local[local[:, 1] < 0]
-    asym = np.hypot(ll[:, None, 0] - rl[None, :, 0], ll[:, None, 1] + rl[None, :, 1])
+    dx = ll[:, None, 0] - rl[None, :, 0]
+    asym = np.hypot(dx, ll[:, None, 1] + rl[None, :, 1])  # left cone mirrored to the right
+    narrow = np.hypot(dx, ll[:, None, 1] - rl[None, :, 1]) < float(min_width_m)
     reach = np.hypot(ll[:, 0], ll[:, 1])[:, None] + np.hypot(rl[:, 0], rl[:, 1])[None, :]
-    narrow = np.hypot(ll[:, None, 0] - rl[None, :, 0],
-                      ll[:, None, 1] - rl[None, :, 1]) < float(min_width_m)
     li, ri = np.meshgrid(lefts, rights, indexing="ij")
     # Wide enough first; then most symmetric; among equals (to a micrometre) the pair nearest
     # the car, then the lowest indices, so the choice does not depend on the order of the input.

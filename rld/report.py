@@ -362,6 +362,7 @@ different thing (its quality checks on a 12-cone window), see docs/benchmarks.md
 def results_page(rows: list[dict], header: str, images: Sequence[str] = ()) -> str:
     """docs/results.md: our Table I analogue per method and range, beside the papers' figures,
     and the given images (paths relative to the page). Regenerate with the command it names."""
+    spread = seeds_markdown(rows)
     return "\n".join([
         "# Results on the shared tracks",
         "",
@@ -379,7 +380,7 @@ def results_page(rows: list[dict], header: str, images: Sequence[str] = ()) -> s
            "The figures above pool every seed's poses. One seed's false positives are a few",
            "persistent configurations, each seen from many poses in a row, so a single seed's",
            "critical rate moves by whole points from seed to seed:", "",
-           seeds_markdown(rows)] if seeds_markdown(rows) else []),
+           spread] if spread else []),
         "## Stability",
         "",
         "The average stability ratio of Huang et al. (2009, section 3.5, eq. 5) between",
