@@ -207,13 +207,15 @@ class ClcModel:
         # No feasible path pair from the best start pair: the runners-up, one at a time
         # (LaneParams.start_pairs), each with a fresh search.
         fallbacks, chosen, iterations = 0, 0, res.iterations
+        depth = _depth(res)
         for rank, other in enumerate(pairs[1:], start=1):
-            if _depth(res) >= MIN_START_DEPTH:
+            if depth >= MIN_START_DEPTH:
                 break
             nxt = enumerate_candidates(points, pose, self.params, graph=res.graph, start=other)
             fallbacks, iterations = fallbacks + 1, iterations + nxt.iterations
-            if _depth(nxt) > _depth(res):
-                res, chosen = nxt, rank
+            d = _depth(nxt)
+            if d > depth:
+                res, chosen, depth = nxt, rank, d
         stats["start_fallbacks"] = fallbacks
         stats.update(iterations=iterations, complete=res.complete,
                      n_candidates=len(res.candidates), n_cones_used=int(points.shape[0]))
