@@ -146,7 +146,14 @@ class ClcModel:
         (left, right, closed, score), in rounds: the ranker's pick of every dive is a finalist
         beside the winner; they differ from it at a close call and are about as long, so the
         ranker's features barely tell them apart, and RLD's objective (the shared
-        ``lane_cost``, eq. 29) decides. When a dive's lane wins, its own close calls are
+        ``lane_cost``, eq. 29) decides, counted within DIVE_REACH_M of the car (``radius_m``):
+        a dive changes the lane only within the reach, and what it builds beyond in its 40
+        iterations is shorter or longer than the winner's tail by chance, which the whole-lane
+        objective (a benefit for every edge) would weigh as much as the close call itself.
+        Measured 2026-12-02 on the six shared tracks, seeds 0-2 pooled, tolerant critical %
+        at 0 / 10 / 30 % false positives: whole lanes R = 30 m 0.58 / 2.40 / 8.39, R = 50 m
+        0.07 / 0.27 / 2.50; within 25 m 0.36 / 2.09 / 7.25 and 0.07 / 0.27 / 2.21 (docs/clc.md
+        for the radii and cuts tried). When a dive's lane wins, its own close calls are
         revisited in the next round (up to DIVE_ROUNDS): a lane two close calls away from the
         winner, where neither change alone is feasible, is reached in two steps. A close call
         is identified by the path up to and with its cone and the other boundary, and is never
@@ -175,8 +182,8 @@ class ClcModel:
                 a, b, c = dive.candidates[k]
                 if cost is None:
                     cost = best_cost = lane_cost(points, winner[0], winner[1], pose, p,
-                                                 closed=winner[2])
-                dc = lane_cost(points, a, b, pose, p, closed=c)
+                                                 closed=winner[2], radius_m=DIVE_REACH_M)
+                dc = lane_cost(points, a, b, pose, p, closed=c, radius_m=DIVE_REACH_M)
                 if dc < best_cost:  # ties: the earlier lane
                     best, best_cost = (a.copy(), b.copy(), c, float(s[k])), dc
             if best is None:

@@ -21,6 +21,7 @@ __all__ = [
     "high_cost_mask",
     "edge_objective",
     "lane_cost",
+    "within_radius",
     "open_path_costs",
     "color_cost",
     "confidence_cost",
@@ -125,15 +126,23 @@ def lane_cost(
     confidence: np.ndarray | None = None,
     sided: bool = False,
     heading: bool = True,
+    radius_m: float | None = None,
 ) -> float:
     """RLD's objective (eq. 29) of the lane graph made by two index sequences: the sum of the
     edge coefficients of its edges plus ``w_t`` times the angle cost at every interior cone,
     plus the colour and confidence costs when given (``sided`` adds the per-cone colour cost
     of the side-aware formulation). ``heading=False`` leaves out the heading cost, as the
-    incremental solver's frontier program does (``edge_objective``)."""
+    incremental solver's frontier program does (``edge_objective``).
+
+    ``radius_m`` (open lanes only; None: the whole lane): each boundary counts only up to and
+    with its first cone farther than this from the car (``within_radius``), so two lanes that
+    agree near the car but end differently far from it cost the same near part (CLC's dive
+    judge, ``clc.solver``). Closed lanes always count whole."""
     total = 0.0
     for side, idx in enumerate((left, right)):
         idx = np.asarray(idx, dtype=np.int64)
+        if radius_m is not None and not closed:
+            idx = within_radius(points, idx, pose, radius_m)
         if confidence is not None and idx.size >= 2:
             total += params.w_confidence * float(confidence_cost(confidence[idx]).sum())
         if sided and colors is not None and idx.size >= 2:
@@ -151,6 +160,22 @@ def lane_cost(
         turns = geo.polyline_turn_angles(points[idx], closed=True)
         total += params.w_angle * float(angle_cost(turns, params.angle_tolerance_rad).sum())
     return total
+
+
+def within_radius(points: np.ndarray, idx: np.ndarray, pose: Pose,
+                  radius_m: float) -> np.ndarray:
+    """The start of the boundary ``idx`` (indices into ``points``, metres) up to and with its
+    first cone farther than ``radius_m`` from the car's position, at least two cones (the
+    whole boundary when no cone is that far). The edge that leaves the disc stays, so a
+    boundary that ends just outside it is not cut short of the edge that reaches it."""
+    idx = np.asarray(idx, dtype=np.int64)
+    if idx.size <= 2:
+        return idx
+    p = np.asarray(points, dtype=np.float64)[idx]
+    far = np.nonzero(np.hypot(p[:, 0] - pose.x, p[:, 1] - pose.y) > radius_m)[0]
+    if far.size == 0:
+        return idx
+    return idx[:max(int(far[0]) + 1, 2)]
 
 
 def open_path_costs(points: np.ndarray, flat: np.ndarray, ptr: np.ndarray, pose: Pose,

@@ -574,7 +574,7 @@ def test_contested_dives_take_the_runner_up_and_the_ranker_decides():
     # The finalists are the ranker's pick of the first search and of each dive; RLD's objective
     # decides among them, whatever the ranker.
     from clc.ranker import get_ranker
-    from rld.costs import lane_cost
+    from clc.solver import DIVE_REACH_M
     for name in ("longest", "learned"):
         ranker = get_ranker(name)
         first = enumerate_candidates(pts, POSE, params)
@@ -583,15 +583,17 @@ def test_contested_dives_take_the_runner_up_and_the_ranker_decides():
                                              *_pick(ranker, pts, params, first)[:2], 0.2, 25.0,
                                              40 + 12):
             picks.append(_pick(ranker, pts, params, res))
-        costs = [lane_cost(pts, a, b, POSE, params) for a, b in picks]
+        # The judge counts each lane within the dive reach of the car.
+        costs = [lane_cost(pts, a, b, POSE, params, radius_m=DIVE_REACH_M) for a, b in picks]
         got = LaneSolver("clc", params, ranker=name).solve(pts, POSE)
+        here = lane_cost(pts, got.left, got.right, POSE, params, radius_m=DIVE_REACH_M)
         # The first round runs exactly these dives; a later round (when a dive's lane won)
         # only adds dives and never raises the cost.
         assert got.stats["dives"] >= len(picks) - 1 >= 1
-        assert lane_cost(pts, got.left, got.right, POSE, params) <= min(costs) + 1e-9
+        assert here <= min(costs) + 1e-9
         if got.stats["dive_rounds"] == 1:
             assert got.stats["dives"] == len(picks) - 1
-            assert lane_cost(pts, got.left, got.right, POSE, params) == pytest.approx(min(costs))
+            assert here == pytest.approx(min(costs))
 
 
 def _no_cheaper_dive(points, pose, params, lane):
@@ -602,7 +604,8 @@ def _no_cheaper_dive(points, pose, params, lane):
     from rld.costs import lane_cost
     first = enumerate_candidates(points, pose, params)
     ranker = get_ranker("learned")
-    here = lane_cost(points, lane.left, lane.right, pose, params, closed=lane.closed)
+    here = lane_cost(points, lane.left, lane.right, pose, params, closed=lane.closed,
+                     radius_m=DIVE_REACH_M)
     for dive in contested_dives(points, pose, params, first.graph, first.start, lane.left,
                                 lane.right, params.contested_margin, DIVE_REACH_M,
                                 DIVE_ITERATIONS + lane.left.size + lane.right.size):
@@ -610,7 +613,8 @@ def _no_cheaper_dive(points, pose, params, lane):
             a, b, c = dive.candidates[int(np.argmax(ranker.score(points, pose, params,
                                                                  dive.candidates,
                                                                  dive.features)))]
-            assert lane_cost(points, a, b, pose, params, closed=c) >= here - 1e-9
+            assert lane_cost(points, a, b, pose, params, closed=c,
+                             radius_m=DIVE_REACH_M) >= here - 1e-9
 
 
 def test_dive_rounds_end_where_no_dive_is_cheaper():

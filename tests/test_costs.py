@@ -2,6 +2,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from rld import costs
 from rld.types import LaneParams, Pose
@@ -82,3 +84,46 @@ def test_edge_objective_matches_lane_cost():
         turns, p.angle_tolerance_rad
     ).sum()
     assert costs.lane_cost(pts, [0, 1, 2, 3, 4], [], CAR, p) == pytest.approx(expect)
+
+
+def test_lane_cost_within_radius_hand_worked():
+    # Straight boundaries 2 m either side of the car's line, cones 3.5 m apart from x = 0:
+    # distances from the car 2, 4.03, 7.28, 10.69, 14.14 m. Within 8 m each boundary keeps
+    # x = 0 .. 10.5 (the first cone beyond 8 m and the edge to it stay): 3 edges a side, each
+    # worth the benefit alone (spacing as expected, parallel to the heading).
+    p = LaneParams(angle_tolerance_rad=1.0, spacing_tolerance_m=2.0)
+    xs = np.arange(5) * 3.5
+    pts = np.vstack([np.column_stack([xs, np.full(5, 2.0)]),
+                     np.column_stack([xs, np.full(5, -2.0)])])
+    left, right = list(range(5)), list(range(5, 10))
+    assert costs.within_radius(pts, left, CAR, 8.0).tolist() == [0, 1, 2, 3]
+    assert costs.within_radius(pts, left, CAR, 100.0).tolist() == left
+    assert costs.within_radius(pts, left, CAR, 0.5).tolist() == [0, 1]  # two cones at least
+    assert costs.lane_cost(pts, left, right, CAR, p) == pytest.approx(-8 * 2.5)
+    assert costs.lane_cost(pts, left, right, CAR, p, radius_m=8.0) == pytest.approx(-6 * 2.5)
+    # A closed lane counts whole.
+    assert costs.lane_cost(pts, left, right, CAR, p, closed=True, radius_m=8.0) == \
+        pytest.approx(costs.lane_cost(pts, left, right, CAR, p, closed=True))
+
+
+@given(seed=st.integers(0, 10_000), radius=st.floats(3.0, 30.0), extra=st.integers(0, 4))
+def test_lane_cost_within_radius_ignores_the_far_part(seed, radius, extra):
+    # Whatever a boundary does past its first cone beyond the radius leaves the cost alone, and
+    # the cost is that of the kept prefixes.
+    rng = np.random.default_rng(seed)
+    p = LaneParams()
+    steps = rng.uniform(2.0, 5.0, size=(8, 2)) * np.array([1.0, 0.3])
+    left = np.array([0.0, 2.0]) + np.cumsum(steps, axis=0)
+    right = np.array([0.0, -2.0]) + np.cumsum(steps[::-1], axis=0)
+    tail = rng.uniform(-40, 40, size=(extra, 2))
+    pts = np.vstack([left, right, tail])
+    li, ri = np.arange(8), np.arange(8, 16)
+    base = costs.lane_cost(pts, li, ri, CAR, p, radius_m=radius)
+    kl, kr = costs.within_radius(pts, li, CAR, radius), costs.within_radius(pts, ri, CAR, radius)
+    assert base == pytest.approx(costs.lane_cost(pts, kl, kr, CAR, p))
+    dist = np.hypot(*pts[li].T)
+    if extra and (dist > radius).any():
+        longer = np.r_[kl, np.arange(16, 16 + extra)]
+        assert costs.lane_cost(pts, longer, ri, CAR, p, radius_m=radius) == pytest.approx(base)
+    if (np.hypot(*pts[:16].T) <= radius).all():
+        assert base == pytest.approx(costs.lane_cost(pts, li, ri, CAR, p))
