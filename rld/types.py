@@ -212,7 +212,8 @@ class LaneParams:
     not take that cone next (it may come later: a skipped cone is mended), with 40 iterations
     beyond rebuilding the lane, and by one that bans the cone when the first took it again;
     the ranker's pick of each dive and of the first search are the finalists, and RLD's
-    objective (``rld.costs.lane_cost``) picks among them. A winning dive's own close calls are
+    objective (``rld.costs.lane_cost``, counted within the 25 m reach of the car since
+    2026-12-02, docs/clc.md) picks among them. A winning dive's own close calls are
     revisited in a next round, up to ``clc.solver.DIVE_ROUNDS`` (3). 0: no dives. Measured
     2026-12-01 on the six shared tracks (every pose, learned ranker, tolerant critical %,
     strict in brackets): R = 50 m 0 -> 0.2 gave 1.60 (4.88) / 3.13 (10.33) / 7.28 (15.50) /
