@@ -732,3 +732,35 @@ def test_narrow_start_pair_comes_last_track4(dataset_dir):
         # Frame.source: negative for a false positive.
         starts_false = f.source[lane.left[0]] < 0 or f.source[lane.right[0]] < 0
         assert bool(starts_false) is critical
+
+
+def test_dive_judge_counts_within_the_reach_track4(dataset_dir, monkeypatch):
+    """Track 4 at R = 30 m, no false positives, pose 142: a true right cone 16.4 m ahead stands
+    1.2 m after the one before it, and the first search skips it. The dive that takes it builds
+    one left cone fewer at 28.7 m, past the 25 m reach. Judged over the whole lanes the skip
+    wins by that cone's benefit (-44.54 against -43.56); within 25 m of the car the lane with
+    the cone wins (-41.11 against -39.99), and the lane no longer diverges before 20 m."""
+    import clc.solver
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    lap = simulate_lap(load_dataset_track(dataset_dir, 4), range_m=30.0, fp_rate=0.0, seed=0)
+    f = lap.frame(142)
+    lane = LaneSolver("clc").solve(f.cones, f.pose)
+    assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
+    assert set(f.gt_right.tolist()) <= set(lane.right.tolist())
+    whole = lane_cost  # the same objective without the radius
+
+    def whole_lane(*args, radius_m=None, **kwargs):
+        return whole(*args, **kwargs)
+
+    monkeypatch.setattr(clc.solver, "lane_cost", whole_lane)
+    skip = LaneSolver("clc").solve(f.cones, f.pose)
+    assert score_lane(f, skip.left, skip.right, skip.ok, skip.closed).critical_tolerant
+    assert len(set(f.gt_right.tolist()) - set(skip.right.tolist())) == 1
+    assert skip.left.size == lane.left.size + 1
+    reach = clc.solver.DIVE_REACH_M
+    assert lane_cost(f.cones, skip.left, skip.right, f.pose, PARAMS) < \
+        lane_cost(f.cones, lane.left, lane.right, f.pose, PARAMS)
+    assert lane_cost(f.cones, lane.left, lane.right, f.pose, PARAMS, radius_m=reach) < \
+        lane_cost(f.cones, skip.left, skip.right, f.pose, PARAMS, radius_m=reach)
