@@ -7,6 +7,8 @@ definition.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from rld import costs_kernels as ck
@@ -168,6 +170,8 @@ def within_radius(points: np.ndarray, idx: np.ndarray, pose: Pose,
     first cone farther than ``radius_m`` from the car's position, at least two cones (the
     whole boundary when no cone is that far). The edge that leaves the disc stays, so a
     boundary that ends just outside it is not cut short of the edge that reaches it."""
+    if not (isinstance(radius_m, int | float) and math.isfinite(radius_m) and radius_m > 0):
+        raise ValueError(f"radius_m must be a positive number of metres, got {radius_m!r}")
     idx = np.asarray(idx, dtype=np.int64)
     if idx.size <= 2:
         return idx

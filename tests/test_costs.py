@@ -101,6 +101,9 @@ def test_lane_cost_within_radius_hand_worked():
     assert costs.within_radius(pts, left, CAR, 0.5).tolist() == [0, 1]  # two cones at least
     assert costs.lane_cost(pts, left, right, CAR, p) == pytest.approx(-8 * 2.5)
     assert costs.lane_cost(pts, left, right, CAR, p, radius_m=8.0) == pytest.approx(-6 * 2.5)
+    for bad in (0.0, -1.0, math.nan, math.inf, "25"):
+        with pytest.raises(ValueError, match="radius_m"):
+            costs.lane_cost(pts, left, right, CAR, p, radius_m=bad)
     # A closed lane counts whole.
     assert costs.lane_cost(pts, left, right, CAR, p, closed=True, radius_m=8.0) == \
         pytest.approx(costs.lane_cost(pts, left, right, CAR, p, closed=True))
