@@ -13,7 +13,7 @@ import numpy as np
 
 from rld import costs_kernels as ck
 from rld import geometry as geo
-from rld.constraints import lane_widths
+from rld.constraints import lane_widths, near_car_mask
 from rld.types import LaneParams, Pose
 
 __all__ = [
@@ -175,8 +175,8 @@ def within_radius(points: np.ndarray, idx: np.ndarray, pose: Pose,
     idx = np.asarray(idx, dtype=np.int64)
     if idx.size <= 2:
         return idx
-    p = np.asarray(points, dtype=np.float64)[idx]
-    far = np.nonzero(np.hypot(p[:, 0] - pose.x, p[:, 1] - pose.y) > radius_m)[0]
+    far = np.flatnonzero(~near_car_mask(np.asarray(points, dtype=np.float64)[idx], pose,
+                                        radius_m))
     if far.size == 0:
         return idx
     return idx[:max(int(far[0]) + 1, 2)]

@@ -137,8 +137,10 @@ def summaries(records: Iterable[PoseRecord]) -> list[dict]:
     rows = []
     for (m, rng, fp), recs in groups.items():
         seeds = sorted({r.seed for r in recs})
-        per = [summarize([r for r in recs if r.seed == sd]) for sd in seeds]
-        rows.append({"method": m, "range_m": rng, "fp_rate": fp, **summarize(recs),
+        pooled = summarize(recs)
+        per = ([pooled] if len(seeds) == 1 else
+               [summarize([r for r in recs if r.seed == sd]) for sd in seeds])
+        rows.append({"method": m, "range_m": rng, "fp_rate": fp, **pooled,
                      "seeds": seeds, "critical_by_seed": [p["critical"] for p in per],
                      "critical_tolerant_by_seed": [p["critical_tolerant"] for p in per]})
     return rows
