@@ -24,6 +24,8 @@ __all__ = [
     "TOLERANT_DISTANCE_M",
     "SideDivergence",
     "PoseScore",
+    "TRUE_LANE_REACH_M",
+    "true_lane_extent",
     "lane_iou",
     "lane_iou20",
     "truncate_polyline",
@@ -40,6 +42,10 @@ CATEGORIES = ("gt", "near_gt", "too_short", "diverging_ge20", "diverging_lt20", 
 CRITICAL_DISTANCE_M = 20.0
 TOLERANT_DISTANCE_M = 0.5
 IOU20_HORIZON_M = 20.0
+#: A true boundary's cone farther than this (m) from the other true boundary lies past the
+#: lane's known end (``true_lane_extent``). It is ``LaneParams.max_width_m``'s default; no cone of
+#: the shared tracks' whole boundaries is farther than 5.75 m from the other boundary.
+TRUE_LANE_REACH_M = 6.5
 _PREFIX_WINDOW = 5  # how many boundary cones before the first true one a lane may start with
 
 
@@ -50,6 +56,69 @@ def _iou(a, b) -> float:
     return float(a.intersection(b).area / union)
 
 
+def true_lane_extent(
+    gt_left: np.ndarray, gt_right: np.ndarray, reach_m: float = TRUE_LANE_REACH_M
+) -> tuple[int, int]:
+    """How many cones of each true boundary (positions, in order) the true lane polygon keeps.
+
+    The protocol's truth (DESIGN.md step 5) follows each side up to its first cone not yet in
+    the map, so one side can run on far past the other's end (on track 2, 100 m past it: the
+    outside of a bend is seen first). Its polygon then closes with a diagonal across the
+    infield, crosses itself, and is no lane any method may return (C_width). Each side is cut
+    before its first cone farther than ``reach_m`` from the other side's polyline, keeping at
+    least its first cone; both sides are measured against the other's uncut polyline, so the
+    rule does not depend on an order. Deviation from DESIGN.md, which takes the sides as they
+    are: see docs/protocol.md.
+    """
+    L = np.asarray(gt_left, dtype=np.float64).reshape(-1, 2)
+    R = np.asarray(gt_right, dtype=np.float64).reshape(-1, 2)
+    if L.shape[0] == 0 or R.shape[0] == 0:
+        return L.shape[0], R.shape[0]
+
+    def keep(a: np.ndarray, b: np.ndarray) -> int:
+        far = np.flatnonzero(geo.point_polyline_distance(a, b) > reach_m)
+        return a.shape[0] if far.size == 0 else max(int(far[0]), 1)
+
+    return keep(L, R), keep(R, L)
+
+
+def _ahead_of_first_cones(gt_left: np.ndarray, gt_right: np.ndarray, heading: np.ndarray):
+    """The line through the first true cones as ``(a0, n)`` (a point on it and its unit normal
+    pointing the way the car faces), or None when the two cones coincide."""
+    a0, b0 = np.asarray(gt_left[0], float), np.asarray(gt_right[0], float)
+    u = b0 - a0
+    norm = np.hypot(*u)
+    if norm == 0:
+        return None
+    u = u / norm
+    n = np.array([-u[1], u[0]])
+    if n @ np.asarray(heading, float) < 0:
+        n = -n
+    return a0, n
+
+
+def _half_plane(a0: np.ndarray, n: np.ndarray) -> Polygon:
+    u = np.array([n[1], -n[0]])
+    big = 1e4
+    return Polygon([a0 - big * u, a0 + big * u, a0 + big * u + big * n, a0 - big * u + big * n])
+
+
+def _from_line(xy: np.ndarray, a0: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """``xy`` from where it first reaches the half-plane ahead of the line (a0, n): the points
+    before are dropped and the crossing point is interpolated; empty when it never does."""
+    xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    side = (xy - a0) @ n
+    ahead = np.flatnonzero(side >= 0.0)
+    if ahead.size == 0:
+        return xy[:0]
+    k = int(ahead[0])
+    if k == 0:
+        return xy.copy()
+    s0, s1 = float(side[k - 1]), float(side[k])  # s0 < 0 <= s1, from the same products
+    t = s0 / (s0 - s1)
+    return np.vstack([xy[k - 1] + t * (xy[k] - xy[k - 1]), xy[k:]])
+
+
 def lane_iou(
     pred_left: np.ndarray,
     pred_right: np.ndarray,
@@ -57,11 +126,23 @@ def lane_iou(
     gt_right: np.ndarray,
     pred_closed: bool = False,
     gt_closed: bool = False,
+    heading: np.ndarray | None = None,
 ) -> float:
     """IoU of the predicted and true lane polygons (left points, then right reversed; invalid
-    polygons repaired with ``shapely.make_valid``). NaN when both have no area."""
+    polygons repaired with ``shapely.make_valid``). NaN when both have no area.
+
+    With ``heading`` (the car's unit heading) and an open truth, both polygons are first clipped
+    to the half-plane ahead of the line through the first true cones, as IoU20 is: the truth
+    starts there, and a lane that begins with the cones just passed is not wrong (the
+    divergence rule lets it), so what lies behind counts neither way.
+    """
     a = geo.lane_polygon(pred_left, pred_right, closed=pred_closed)
     b = geo.lane_polygon(gt_left, gt_right, closed=gt_closed)
+    if heading is not None and not gt_closed and len(gt_left) and len(gt_right):
+        line = _ahead_of_first_cones(gt_left, gt_right, heading)
+        if line is not None:
+            half = _half_plane(*line)
+            a, b = a.intersection(half), b.intersection(half)
     return _iou(a, b)
 
 
@@ -86,24 +167,18 @@ def lane_iou20(
     gt_right: np.ndarray,
     heading: np.ndarray,
 ) -> float:
-    """IoU20: every boundary cut to its first 20 m of arc length, both polygons clipped to the
-    half-plane ahead of the line through the first true cones, then IoU. NaN without a true
-    lane."""
+    """IoU20: every boundary cut to the first 20 m of its arc length ahead of the line through
+    the first true cones (a boundary that begins behind it is measured from where it crosses
+    it), both polygons clipped to the half-plane ahead of that line, then IoU. NaN without a
+    true lane."""
     if len(gt_left) == 0 or len(gt_right) == 0:
         return math.nan
-    pl, pr = (truncate_polyline(x, IOU20_HORIZON_M) for x in (pred_left, pred_right))
-    gl, gr = (truncate_polyline(x, IOU20_HORIZON_M) for x in (gt_left, gt_right))
-    a0, b0 = np.asarray(gt_left[0], float), np.asarray(gt_right[0], float)
-    u = b0 - a0
-    norm = np.hypot(*u)
-    if norm == 0:
+    line = _ahead_of_first_cones(gt_left, gt_right, heading)
+    if line is None:
         return math.nan
-    u = u / norm
-    n = np.array([-u[1], u[0]])
-    if n @ heading < 0:
-        n = -n
-    big = 1e4
-    half = Polygon([a0 - big * u, b0 + big * u, b0 + big * u + big * n, a0 - big * u + big * n])
+    pl, pr, gl, gr = (truncate_polyline(_from_line(x, *line), IOU20_HORIZON_M)
+                      for x in (pred_left, pred_right, gt_left, gt_right))
+    half = _half_plane(*line)
     a = geo.lane_polygon(pl, pr).intersection(half)
     b = geo.lane_polygon(gl, gr).intersection(half)
     return _iou(a, b)
@@ -253,11 +328,13 @@ def score_lane(
     if not ok:
         mean_true = float(np.mean(true_len))
         return PoseScore("failed", "failed", 0.0, 0.0, False, 0.0, 0.0, 0.0, mean_true)
-    iou = lane_iou(cones[left], cones[right], cones[frame.gt_left], cones[frame.gt_right],
-                   closed, gt_closed)
+    gl, gr = cones[frame.gt_left], cones[frame.gt_right]
+    if not gt_closed:
+        kl, kr = true_lane_extent(gl, gr)
+        gl, gr = gl[:kl], gr[:kr]
+    iou = lane_iou(cones[left], cones[right], gl, gr, closed, gt_closed, frame.pose.heading)
     iou = 0.0 if math.isnan(iou) else iou
-    iou20 = lane_iou20(cones[left], cones[right], cones[frame.gt_left], cones[frame.gt_right],
-                       frame.pose.heading)
+    iou20 = lane_iou20(cones[left], cones[right], gl, gr, frame.pose.heading)
     exact = (
         np.array_equal(left, frame.gt_left) and np.array_equal(right, frame.gt_right)
     )

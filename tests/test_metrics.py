@@ -18,6 +18,7 @@ from rld.generator import generate_track
 from rld.metrics import (
     CATEGORIES,
     PoseScore,
+    _from_line,
     categorize,
     circle_crossing,
     lane_iou,
@@ -27,6 +28,7 @@ from rld.metrics import (
     side_agreement,
     side_divergence,
     stability_ratio,
+    true_lane_extent,
     truncate_polyline,
 )
 from rld.simulation import Frame, simulate_lap
@@ -528,16 +530,18 @@ def test_lane_iou20_cuts_at_20m():
     assert lane_iou20(wl, wr, gl, gr, heading) == pytest.approx(40.0 / 80.0)
 
 
-def test_lane_iou20_drops_what_lies_behind_the_first_true_cones():
+def test_lane_iou20_measures_from_the_first_true_cones():
     heading = np.array([1.0, 0.0])
     gl, gr = rect_lane(0, 40, 2, 9)
-    # The prediction starts 5 m behind the first true cones: its first 20 m end at x = 15, and
-    # the part behind x = 0 is dropped: [0, 15] vs [0, 20] -> 60 / 80.
+    # The prediction starts 5 m behind the first true cones: its 20 m are measured from where
+    # it crosses the line x = 0, so they end at x = 20 like the truth's, and the part behind
+    # x = 0 is dropped: IoU20 = 1. (Until 2026-12-02 they were measured from its first cone,
+    # ended at x = 15 and gave 60 / 80.)
     pl, pr = rect_lane(-5, 40, 2, 10)
-    assert lane_iou20(pl, pr, gl, gr, heading) == pytest.approx(0.75)
+    # Starting behind and half as wide: [0, 20] x 2 inside [0, 20] x 4: 40 / 80.
+    wl, wr = rect_lane(-5, 40, 1, 10)
     # Mirrored: driving along -x.
     m = np.array([-1.0, 1.0])
-    assert lane_iou20(pl * m, pr * m, gl * m, gr * m, -heading) == pytest.approx(0.75)
     # Rotated by 37 degrees about an arbitrary point.
     c, s = math.cos(0.65), math.sin(0.65)
     rot = np.array([[c, -s], [s, c]])
@@ -545,7 +549,61 @@ def test_lane_iou20_drops_what_lies_behind_the_first_true_cones():
     def tf(p):
         return p @ rot.T + np.array([12.0, -7.0])
 
-    assert lane_iou20(tf(pl), tf(pr), tf(gl), tf(gr), rot @ heading) == pytest.approx(0.75)
+    for f, h in ((lambda p: p, heading), (lambda p: p * m, -heading), (tf, rot @ heading)):
+        assert lane_iou20(f(pl), f(pr), f(gl), f(gr), h) == pytest.approx(1.0)
+        assert lane_iou20(f(wl), f(wr), f(gl), f(gr), h) == pytest.approx(0.5)
+        # Without a heading the whole-lane IoU counts the 5 m behind against it: 160 / 180;
+        # with one, what lies behind x = 0 is dropped.
+        assert lane_iou(f(pl), f(pr), f(gl), f(gr)) == pytest.approx(160.0 / 180.0)
+        assert lane_iou(f(pl), f(pr), f(gl), f(gr), heading=h) == pytest.approx(1.0)
+
+
+def test_from_line_hand_worked():
+    a0, n = np.array([0.0, 0.0]), np.array([1.0, 0.0])
+    xy = np.array([(-4, 0), (-2, 1), (2, 3), (5, 3)], float)
+    # Crosses x = 0 halfway between (-2, 1) and (2, 3), at (0, 2).
+    np.testing.assert_allclose(_from_line(xy, a0, n), [(0, 2), (2, 3), (5, 3)])
+    np.testing.assert_allclose(_from_line(xy[2:], a0, n), xy[2:])
+    assert _from_line(xy[:2], a0, n).shape == (0, 2)
+
+
+def test_true_lane_extent_hand_worked():
+    # Left: 4 cones at x = 0, 4, 8, 12 (y = 2); right: 9 cones at x = 0..32 (y = -2), running
+    # on past the left's end. Distances of the right cones to the left polyline: 4 while
+    # beside it (x <= 12), then hypot(x - 12, 4): 5.66 at x = 16, 8.94 at x = 20. So the right
+    # keeps x = 0..16 (5 cones), the left all 4.
+    left = np.column_stack([np.arange(0, 13, 4.0), np.full(4, 2.0)])
+    right = np.column_stack([np.arange(0, 33, 4.0), np.full(9, -2.0)])
+    assert true_lane_extent(left, right) == (4, 5)
+    assert true_lane_extent(right, left) == (5, 4)
+    assert true_lane_extent(left, right, reach_m=4.5) == (4, 4)
+    assert true_lane_extent(left, right, reach_m=9.0) == (4, 6)
+    # Sides beside each other all along are kept whole; an empty side leaves the other alone.
+    assert true_lane_extent(left, right[:4]) == (4, 4)
+    assert true_lane_extent(left, np.zeros((0, 2))) == (4, 0)
+    # A first cone already too far is kept (at least one cone per side).
+    assert true_lane_extent(left + [0.0, 10.0], right[:4]) == (1, 1)
+
+
+def test_score_lane_cuts_the_true_lane_to_both_sides_extent():
+    # The right truth runs 15 m on past the left's end (x = 3..24 against 3..39).
+    left, right = straight(13)
+    h = Hand(left, right, gt_left=np.arange(8), gt_right=np.arange(13), missing_left=[8])
+    # A lane whose sides both end at x = 24 (left) and x = 27 (right: the last right cone
+    # within 6.5 m of the left polyline, hypot(3, 4) = 5): the true polygon is cut the same
+    # way, IoU 1. Before 2026-12-02 the whole truth's polygon, closing with a diagonal from
+    # (24, 2) to (39, -2), was [3, 24] x 4 = 84 plus a triangle of 0.5 * 15 * 4 = 30, and the
+    # lane's 84 + 0.5 * 3 * 4 = 90 inside it: 90 / 114.
+    s = h.score(h.L[:8], h.R[:9])
+    c = h.frame.cones
+    assert lane_iou(c[h.L[:8]], c[h.R[:9]], c[h.frame.gt_left], c[h.frame.gt_right]) == (
+        pytest.approx(90.0 / 114.0))
+    assert s.iou == pytest.approx(1.0)
+    assert s.iou20 == pytest.approx(1.0)
+    # The categories still follow each side's whole truth: the right stops before its end
+    # but is past half of it.
+    assert s.category == "near_gt"
+    assert s.true_length_m == pytest.approx((21.0 + 36.0) / 2)
 
 
 def test_lane_iou20_nan_without_a_true_lane():
@@ -779,3 +837,46 @@ def test_lanes_agree_needs_both_sides_and_counts_no_lane():
     assert lanes_agree((left, right), (left[:1], right), min_common=1)
     assert lanes_agree(None, None)
     assert not lanes_agree((left, right), None)
+
+
+@settings(max_examples=60)
+@given(na=st.integers(1, 30), nb=st.integers(1, 30), hw=st.floats(0.5, 3.0))
+def test_true_lane_extent_of_parallel_sides(na, nb, hw):
+    # Sides 2 * hw apart, cones every metre from x = 0: the shorter is kept whole, the longer
+    # up to x <= end + sqrt(reach^2 - (2 hw)^2), the last x at which a cone is within reach of
+    # the shorter side's end.
+    a = np.column_stack([np.arange(na, dtype=float), np.full(na, hw)])
+    b = np.column_stack([np.arange(nb, dtype=float), np.full(nb, -hw)])
+    end = min(na, nb) - 1
+    reach_x = math.sqrt(6.5**2 - (2 * hw) ** 2)
+    past = [x for x in range(max(na, nb)) if x > end + reach_x + 1e-9]
+    longer = past[0] if past else max(na, nb)
+    assume(not past or abs(past[0] - end - reach_x) > 1e-6)
+    want = (longer, nb) if na > nb else (na, longer) if nb > na else (na, nb)
+    assert true_lane_extent(a, b) == want
+
+
+@settings(max_examples=300)
+@given(
+    pts=st.lists(st.tuples(st.floats(-30, 30), st.floats(-30, 30)), min_size=2, max_size=8),
+    i=st.integers(0, 7),
+    j=st.integers(0, 7),
+)
+def test_from_line_through_the_polylines_own_points(pts, i, j):
+    # The line through two of the polyline's own points, where rounding decides which side a
+    # point on it falls (a lane starting with the first true cone): never a division by zero,
+    # the result starts on or ahead of the line and ends with the input's last points.
+    xy = np.array(pts, float)
+    a, b = xy[i % len(xy)], xy[j % len(xy)]
+    assume(np.hypot(*(b - a)) > 1e-3)
+    u = (b - a) / np.hypot(*(b - a))
+    n = np.array([-u[1], u[0]])
+    out = _from_line(xy, a, n)
+    side = (xy - a) @ n
+    if not np.any(side >= 0):
+        assert out.shape == (0, 2)
+        return
+    k = int(np.flatnonzero(side >= 0)[0])
+    np.testing.assert_array_equal(out[-(len(xy) - k):], xy[k:])
+    assert out.shape[0] == len(xy) - k + (k > 0)
+    assert (out[0] - a) @ n >= -1e-9
