@@ -341,13 +341,16 @@ def bench_budget(backends: str, sizes: str, budgets: str, n_tracks: int, stride:
 @click.option("--backend", default="cpsat", show_default=True)
 @click.option("--cones", "n_cones", default=12, show_default=True, help="Cones per window.")
 @click.option("--poses", default=60, show_default=True, help="Poses per topology and ratio.")
+@click.option("--seeds", default="0,1,2,3,4", show_default=True,
+              help="Comma-separated seeds (tracks, noise, false positives), pooled.")
 @click.option("--out", default=None, help="Also write the Markdown table to this file.")
-def bench_rld_paper(method: str, backend: str, n_cones: int, poses: int,
+def bench_rld_paper(method: str, backend: str, n_cones: int, poses: int, seeds: str,
                     out: str | None) -> None:
     """RLD accuracy in the paper's experiment (fig. 7): topologies x false-positive ratios."""
     mod = _benchmark_module("bench_rld_paper")
     table = mod.to_markdown(mod.run(backend=backend, n_cones=n_cones, poses=poses,
-                                    method=method))
+                                    method=method,
+                                    seeds=[int(v) for v in seeds.split(",") if v.strip()]))
     _emit(table, out)
 
 

@@ -135,7 +135,7 @@ def run_protocol(
             ))
             if plot_failures and sc.critical:
                 _plot_failure(plot_failures, label or method, track.name, frame, lane, sc,
-                              range_m, fp_rate)
+                              range_m, fp_rate, seed)
             if bar is not None:
                 bar.update(1)
     if bar is not None:
@@ -158,18 +158,20 @@ def _stability(prev, pose, raw, tracked) -> dict:
     return out
 
 
-def _plot_failure(folder, method, track, frame, lane, sc, range_m, fp_rate) -> None:
+def _plot_failure(folder, method, track, frame, lane, sc, range_m, fp_rate, seed=0) -> None:
     from pathlib import Path
 
     from rld.plotting import plot_scene
 
     Path(folder).mkdir(parents=True, exist_ok=True)
-    name = (f"{method}_{track}_R{range_m:g}_fp{round(100 * fp_rate)}_pose{frame.index}"
-            .replace(" ", "").replace(":", "-"))
+    # The seed is in the name: runs over several seeds would otherwise overwrite each other.
+    name = (f"{method}_{track}_R{range_m:g}_fp{round(100 * fp_rate)}_seed{seed}"
+            f"_pose{frame.index}".replace(" ", "").replace(":", "-"))
     plot_scene(frame.cones, lane=lane, pose=frame.pose, gt_left=frame.gt_left,
                gt_right=frame.gt_right, false_positive=frame.is_false_positive,
-               title=f"{method}, {track}, R {range_m:g} m, FP {fp_rate:.0%}, pose {frame.index}: "
-                     f"{sc.category}, diverges at {sc.divergence_m:.1f} m",
+               title=f"{method}, {track}, R {range_m:g} m, FP {fp_rate:.0%} (seed {seed}), "
+                     f"pose {frame.index}: {sc.category} (tolerant: {sc.category_tolerant}), "
+                     f"diverges at {sc.divergence_m:.1f} m",
                path=str(Path(folder) / f"{name}.png"))
 
 

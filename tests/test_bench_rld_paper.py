@@ -82,3 +82,22 @@ def test_truth_in_program_is_the_shared_cost_and_never_beats_the_optimum(all_fra
     # A straight's 4 m spacing is longer than a 3.5 m limit: the truth is no solution.
     f = next(f for f in all_frames if f.topology == "straight")
     assert B.truth_in_program(f, LaneParams(max_cones=12, max_cone_spacing_m=3.5)) is None
+
+
+def test_pooled_seeds_are_the_sum_of_single_seeds():
+    """``run`` over two seeds pools exactly what each seed gives alone, and tallies each."""
+    kw = dict(poses=3, progress=False)
+    both = B.run(seeds=(0, 1), **kw)
+    alone = {s: B.run(seeds=(s,), **kw) for s in (0, 1)}
+    for row in both:
+        key = (row["topology"], row["ratio"])
+        parts = [next(r for r in alone[s] if (r["topology"], r["ratio"]) == key) for s in (0, 1)]
+        assert row["solves"] == sum(p["solves"] for p in parts)
+        for pct in ("inaccurate_pct", "inaccurate_tolerant_pct"):
+            pooled = sum(p[pct] * p["solves"] for p in parts) / row["solves"]
+            assert abs(row[pct] - pooled) < 1e-9
+        for s, p in zip((0, 1), parts, strict=True):
+            n, bad, tol = row["per_seed"][s]
+            assert n == p["solves"]
+            assert abs(100 * bad / n - p["inaccurate_pct"]) < 1e-9
+            assert abs(100 * tol / n - p["inaccurate_tolerant_pct"]) < 1e-9

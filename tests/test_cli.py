@@ -58,9 +58,17 @@ def test_bench_budget_quick():
 
 
 def test_bench_rld_paper_quick():
-    result = CliRunner().invoke(main, ["bench", "rld-paper", "--poses", "3"])
+    result = CliRunner().invoke(main, ["bench", "rld-paper", "--poses", "3", "--seeds", "0"])
     assert result.exit_code == 0, result.output
     assert "| all | 1:1 | 9 |" in result.output and "tolerant (%)" in result.output
+    assert "Per seed" not in result.output
+
+
+def test_bench_rld_paper_pools_seeds_and_tallies_each():
+    result = CliRunner().invoke(main, ["bench", "rld-paper", "--poses", "2", "--seeds", "0,1"])
+    assert result.exit_code == 0, result.output
+    assert "| all | 1:5 | 12 |" in result.output  # 2 seeds x 3 topologies x 2 poses
+    assert "| false : real | seed 0 | seed 1 |" in result.output
 
 
 def test_eval_refuses_a_stride_that_restarts_the_incremental_solver():

@@ -149,3 +149,18 @@ def test_stability_is_recorded_and_tabulated(tmp_path):
     md = paths["results"].read_text()
     assert "**Stability**" in md and "tracked 20 m" in md
     assert (tmp_path / "out" / "stability.png").stat().st_size > 0
+
+
+def test_failure_pictures_of_several_seeds_do_not_overwrite_each_other(tmp_path):
+    """Every critical failure of every seed gets its own picture (the seed is in the name)."""
+    track = generate_track(3)
+    folder = tmp_path / "fails"
+    crit = 0
+    for sd in (0, 5):
+        recs = run_protocol([track], method="nearest", range_m=30.0, fp_rate=0.3, every=20,
+                            seed=sd, plot_failures=str(folder))
+        crit += sum(r.category in ("diverging_lt20", "failed") for r in recs)
+    assert crit > 0  # the nearest-cone baseline fails here; else the test proves nothing
+    pictures = list(folder.iterdir())
+    assert len(pictures) == crit
+    assert {p.name.split("_seed")[1].split("_")[0] for p in pictures} <= {"0", "5"}
