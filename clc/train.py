@@ -3,7 +3,9 @@
 
 Data (``collect``): the evaluation protocol (``rld.simulation``) drives laps over tracks; at
 every ``every``-th pose CLC enumerates its candidates on the partial map (cold start, it_max of
-``LaneParams``) and each candidate gets a score: its IoU with the ground-truth lane minus
+``LaneParams``) and each candidate gets a score: the protocol's IoU with the true lane
+(``rld.metrics.candidate_ious``, the one the evaluation scores with; since 2026-12-02, before
+which training compared with the uncut truth polygon, behind the car included) minus
 ``wrong_cone_penalty`` for every cone it puts on a side whose boundary does not hold that cone
 (a false positive, an unlabelled cone, a cone of the other side). One *list* per pose:
 (features, scores). Deviation: the paper's target is the IoU alone; a boundary that hooks onto
@@ -26,10 +28,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import shapely
 
 from rld.costs import FEATURE_NAMES
 from rld.geometry import lane_polygon
+from rld.metrics import candidate_ious, true_sides
 from rld.types import LaneParams
 
 if TYPE_CHECKING:
@@ -81,13 +83,6 @@ def _as_lists(lists) -> list[RankingList]:
     return out
 
 
-def _ious(points, cands, gt_poly) -> np.ndarray:
-    polys = [lane_polygon(points[a], points[b], closed=c) for a, b, c in cands]
-    inter = shapely.area(shapely.intersection(polys, gt_poly))
-    union = shapely.area(shapely.union(polys, gt_poly))
-    return np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)
-
-
 def collect(tracks: Iterable[Track], fp_rates=(0.0, 0.1, 0.3), ranges=(50.0,), every: int = 4,
             max_per_list: int = 96, seed: int = 0, params: LaneParams | None = None,
             wrong_cone_penalty: float = 0.03, progress: bool = True) -> list[RankingList]:
@@ -113,9 +108,8 @@ def collect(tracks: Iterable[Track], fp_rates=(0.0, 0.1, 0.3), ranges=(50.0,), e
             n = len(res.candidates)
             if n < 2 or frame.gt_left.size < 2 or frame.gt_right.size < 2:
                 continue
-            gt = lane_polygon(frame.cones[frame.gt_left], frame.cones[frame.gt_right],
-                              closed=frame.gt_closed)
-            if gt.area <= 0:
+            gl, gr = true_sides(frame)
+            if lane_polygon(gl, gr, closed=frame.gt_closed).area <= 0:
                 continue
             keep = np.arange(n)
             if n > max_per_list:
@@ -126,7 +120,7 @@ def collect(tracks: Iterable[Track], fp_rates=(0.0, 0.1, 0.3), ranges=(50.0,), e
                     [longest, rng.choice(rest, size=max_per_list - longest.size,
                                          replace=False)]))
             chosen = [res.candidates[int(i)] for i in keep]
-            iou = _ious(frame.cones, chosen, gt)
+            iou = candidate_ious(frame, chosen)  # the protocol's own IoU (rld.metrics)
             on_left = np.zeros(frame.cones.shape[0], dtype=bool)
             on_right = np.zeros(frame.cones.shape[0], dtype=bool)
             on_left[frame.left_seq[frame.left_seq >= 0]] = True

@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 from shapely.geometry import Polygon
 
 from rld import geometry as geo
@@ -26,7 +27,9 @@ __all__ = [
     "PoseScore",
     "TRUE_LANE_REACH_M",
     "true_lane_extent",
+    "true_sides",
     "lane_iou",
+    "candidate_ious",
     "lane_iou20",
     "truncate_polyline",
     "side_divergence",
@@ -144,6 +147,38 @@ def lane_iou(
             half = _half_plane(*line)
             a, b = a.intersection(half), b.intersection(half)
     return _iou(a, b)
+
+
+def true_sides(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
+    """The true boundaries (positions, metres) that the protocol's IoU and IoU20 compare with:
+    ``frame``'s truth, cut to both sides' common extent (``true_lane_extent``) unless closed."""
+    gl, gr = frame.cones[frame.gt_left], frame.cones[frame.gt_right]
+    if not frame.gt_closed:
+        kl, kr = true_lane_extent(gl, gr)
+        gl, gr = gl[:kl], gr[:kr]
+    return gl, gr
+
+
+def candidate_ious(frame: Frame, candidates) -> np.ndarray:
+    """The protocol's IoU (as ``score_lane`` gives it, 0 where it is undefined) of many lanes
+    at once: ``candidates`` are ``(left, right, closed)`` with frame indices. Vectorized over
+    the candidates with shapely; CLC's ranker trains on it (``clc.train``)."""
+    cones = frame.cones
+    gl, gr = true_sides(frame)
+    truth = geo.lane_polygon(gl, gr, closed=frame.gt_closed)
+    polys = np.array([geo.lane_polygon(cones[np.asarray(a, dtype=np.int64)],
+                                       cones[np.asarray(b, dtype=np.int64)], closed=c)
+                      for a, b, c in candidates], dtype=object)
+    if polys.size == 0:
+        return np.zeros(0)
+    if not frame.gt_closed and len(gl) and len(gr):
+        line = _ahead_of_first_cones(gl, gr, frame.pose.heading)
+        if line is not None:
+            half = _half_plane(*line)
+            polys, truth = shapely.intersection(polys, half), truth.intersection(half)
+    inter = shapely.area(shapely.intersection(polys, truth))
+    union = shapely.area(shapely.union(polys, truth))
+    return np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)
 
 
 def truncate_polyline(xy: np.ndarray, length_m: float) -> np.ndarray:
@@ -328,10 +363,7 @@ def score_lane(
     if not ok:
         mean_true = float(np.mean(true_len))
         return PoseScore("failed", "failed", 0.0, 0.0, False, 0.0, 0.0, 0.0, mean_true)
-    gl, gr = cones[frame.gt_left], cones[frame.gt_right]
-    if not gt_closed:
-        kl, kr = true_lane_extent(gl, gr)
-        gl, gr = gl[:kl], gr[:kr]
+    gl, gr = true_sides(frame)
     iou = lane_iou(cones[left], cones[right], gl, gr, closed, gt_closed, frame.pose.heading)
     iou = 0.0 if math.isnan(iou) else iou
     iou20 = lane_iou20(cones[left], cones[right], gl, gr, frame.pose.heading)

@@ -19,6 +19,7 @@ from rld.metrics import (
     CATEGORIES,
     PoseScore,
     _from_line,
+    candidate_ious,
     categorize,
     circle_crossing,
     lane_iou,
@@ -604,6 +605,39 @@ def test_score_lane_cuts_the_true_lane_to_both_sides_extent():
     # but is past half of it.
     assert s.category == "near_gt"
     assert s.true_length_m == pytest.approx((21.0 + 36.0) / 2)
+
+
+def test_candidate_ious_hand_worked():
+    # The frame of the test above: the whole-truth polygon would give 90 / 114, the protocol's
+    # truth (cut to both sides' extent) 1; a lane of the left's first 4 cones and the right's
+    # first 4 (x = 3..12 on both sides, 9 x 4 = 36 inside the cut truth's 21 x 4 + 6 = 90)
+    # gives 36 / 90.
+    left, right = straight(13)
+    h = Hand(left, right, gt_left=np.arange(8), gt_right=np.arange(13), missing_left=[8])
+    got = candidate_ious(h.frame, [(h.L[:8], h.R[:9], False), (h.L[:4], h.R[:4], False)])
+    assert got == pytest.approx([1.0, 36.0 / 90.0])
+    assert candidate_ious(h.frame, []).shape == (0,)
+
+
+@pytest.mark.parametrize("seed", [0, 4])
+def test_candidate_ious_equal_score_lane_on_clc_candidates(seed):
+    """The vectorized IoU that CLC's ranker trains on is the protocol's IoU, candidate by
+    candidate, open and closed truths, with false positives (the map's whole candidate list)."""
+    from clc.search import enumerate_candidates
+    from rld.types import LaneParams
+
+    lap = simulate_lap(generate_track(seed), range_m=50.0, fp_rate=0.3, seed=seed)
+    checked = 0
+    for k in list(range(3, len(lap), 45)) + [len(lap) - 1]:
+        f = lap.frame(k)
+        cands = enumerate_candidates(f.cones, f.pose, LaneParams(max_iterations=60)).candidates
+        if not cands:
+            continue
+        got = candidate_ious(f, cands)
+        want = [score_lane(f, a, b, closed=c).iou for a, b, c in cands]
+        assert got == pytest.approx(want, abs=1e-9), k
+        checked += len(cands)
+    assert checked > 50
 
 
 def test_lane_iou20_nan_without_a_true_lane():
