@@ -141,12 +141,20 @@ def lane_iou(
     """
     a = geo.lane_polygon(pred_left, pred_right, closed=pred_closed)
     b = geo.lane_polygon(gt_left, gt_right, closed=gt_closed)
+    a, b = _ahead_only(a, b, gt_left, gt_right, heading, gt_closed)
+    return _iou(a, b)
+
+
+def _ahead_only(pred, truth, gt_left, gt_right, heading, gt_closed):
+    """``pred`` (one polygon or an array of them) and ``truth`` clipped to the half-plane ahead
+    of the line through the first true cones (``lane_iou``); unchanged without a heading, for
+    a closed truth, or when that line is undefined."""
     if heading is not None and not gt_closed and len(gt_left) and len(gt_right):
         line = _ahead_of_first_cones(gt_left, gt_right, heading)
         if line is not None:
             half = _half_plane(*line)
-            a, b = a.intersection(half), b.intersection(half)
-    return _iou(a, b)
+            return shapely.intersection(pred, half), truth.intersection(half)
+    return pred, truth
 
 
 def true_sides(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
@@ -171,11 +179,7 @@ def candidate_ious(frame: Frame, candidates) -> np.ndarray:
                       for a, b, c in candidates], dtype=object)
     if polys.size == 0:
         return np.zeros(0)
-    if not frame.gt_closed and len(gl) and len(gr):
-        line = _ahead_of_first_cones(gl, gr, frame.pose.heading)
-        if line is not None:
-            half = _half_plane(*line)
-            polys, truth = shapely.intersection(polys, half), truth.intersection(half)
+    polys, truth = _ahead_only(polys, truth, gl, gr, frame.pose.heading, frame.gt_closed)
     inter = shapely.area(shapely.intersection(polys, truth))
     union = shapely.area(shapely.union(polys, truth))
     return np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)
