@@ -374,6 +374,61 @@ def test_tolerant_rule_skips_points_on_the_true_line():
             assert s.divergence_tolerant_m == pytest.approx(strict_div), k
 
 
+def test_tolerant_rule_lets_a_point_on_the_line_stand_in_for_a_true_cone():
+    left, right = straight(10)
+    # Left cone 3 stands at (12, 2); a false positive 0.1 m off the line, 0.22 m from it.
+    h = Hand(left, right, extra=[(12.2, 2.1)])
+    strict_div = SQRT13 + 6.0  # the last true cone matched before it: x = 9
+    instead = np.concatenate([h.L[:3], h.X, h.L[4:]])  # the FP in place of cone 3
+    besides = np.concatenate([h.L[:3], h.X, h.L[3:]])  # the FP and cone 3 (forgiven before)
+    for pl in (instead, besides):
+        s = h.score(pl, h.R)
+        assert s.category == "diverging_lt20" and s.divergence_m == pytest.approx(strict_div)
+        assert s.category_tolerant == "near_gt" and s.divergence_tolerant_m == math.inf
+    # Cone 3 skipped with no point in its place: a divergence under both rules.
+    s = h.score(np.concatenate([h.L[:3], h.L[4:]]), h.R)
+    assert s.divergence_m == s.divergence_tolerant_m == pytest.approx(strict_div)
+
+
+def test_a_stand_in_must_keep_the_skipped_true_cone_within_half_a_metre():
+    # A left boundary that turns: (9, 2) -> (11.5, 4) -> (12, 7). A false positive on the line
+    # beside (9, 2) and then (12, 7): the skipped cone (11.5, 4) lies 1.01 m from that polyline
+    # (the segment from (9.3, 2.1) to (12, 7): cross product 5.65 over its length 5.595).
+    left = np.array([(3, 2), (6, 2), (9, 2), (11.5, 4), (12, 7), (12, 10)], float)
+    right = np.array([(3, -2), (6, -2), (9, -2), (14, 1), (16, 6), (16, 10)], float)
+    h = Hand(left, right, extra=[(9.3, 2.1)])
+    s = h.score(np.concatenate([h.L[:3], h.X, h.L[4:]]), h.R)
+    assert s.critical_tolerant
+    assert s.divergence_tolerant_m == pytest.approx(SQRT13 + 6.0)
+    # Moved to (10, 3) the skipped cone is 0.18 m from it (cross 1.0 / 5.595): forgiven.
+    left[3] = (10.0, 3.0)
+    h = Hand(left, right, extra=[(9.3, 2.1)])
+    assert not h.score(np.concatenate([h.L[:3], h.X, h.L[4:]]), h.R).critical_tolerant
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 8), st.floats(-0.8, 0.8), st.booleans()),
+                min_size=1, max_size=4))
+def test_tolerant_divergence_is_never_nearer_than_strict(points):
+    """Points near the left line (offset up to 0.8 m), each inserted after true cone i or put in
+    its place: the tolerant rule forgives at least what the strict one does."""
+    left, right = straight(10)
+    extra = [(left[i, 0] + 1.0, left[i, 1] + dy) for i, dy, _ in points]
+    h = Hand(left, right, extra=extra)
+    pl = list(h.L)
+    # Apply from the back so the positions stay valid; a replacement drops true cone i + 1.
+    for k in sorted(range(len(points)), key=lambda k: -points[k][0]):
+        i, _, replace = points[k]
+        at = pl.index(h.L[i]) + 1
+        if replace and at < len(pl) and pl[at] in h.L:
+            pl[at] = h.X[k]
+        else:
+            pl.insert(at, h.X[k])
+    s = h.score(np.array(pl), h.R)
+    assert s.divergence_tolerant_m >= s.divergence_m
+    assert not (s.critical_tolerant and not s.critical)
+
+
 def test_tolerant_rule_does_not_excuse_boundary_cones():
     # A right cone 0.3 m from the left line (a very narrow lane) is on a boundary: not skipped.
     left = np.array([(3, 2), (6, 2), (9, 2), (12, 2)], float)
