@@ -30,8 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rld.costs import FEATURE_NAMES
-from rld.geometry import lane_polygon
-from rld.metrics import candidate_ious, true_sides
+from rld.metrics import candidate_ious, true_polygon
 from rld.types import LaneParams
 
 if TYPE_CHECKING:
@@ -108,8 +107,7 @@ def collect(tracks: Iterable[Track], fp_rates=(0.0, 0.1, 0.3), ranges=(50.0,), e
             n = len(res.candidates)
             if n < 2 or frame.gt_left.size < 2 or frame.gt_right.size < 2:
                 continue
-            gl, gr = true_sides(frame)
-            if lane_polygon(gl, gr, closed=frame.gt_closed).area <= 0:
+            if true_polygon(frame).area <= 0:
                 continue
             keep = np.arange(n)
             if n > max_per_list:

@@ -29,6 +29,7 @@ __all__ = [
     "TRUE_LANE_REACH_M",
     "true_lane_extent",
     "true_sides",
+    "true_polygon",
     "lane_iou",
     "candidate_ious",
     "lane_iou20",
@@ -150,12 +151,26 @@ def _ahead_only(pred, truth, gt_left, gt_right, heading, gt_closed):
     """``pred`` (one polygon or an array of them) and ``truth`` clipped to the half-plane ahead
     of the line through the first true cones (``lane_iou``); unchanged without a heading, for
     a closed truth, or when that line is undefined."""
-    if heading is not None and not gt_closed and len(gt_left) and len(gt_right):
-        line = _ahead_of_first_cones(gt_left, gt_right, heading)
-        if line is not None:
-            half = _half_plane(*line)
-            return shapely.intersection(pred, half), truth.intersection(half)
-    return pred, truth
+    if heading is None or gt_closed or not len(gt_left) or not len(gt_right):
+        return pred, truth
+    return _clip_ahead(pred, truth, _ahead_of_first_cones(gt_left, gt_right, heading))
+
+
+def _clip_ahead(pred, truth, line):
+    """``pred`` (one polygon or an array of them) and ``truth`` clipped to the half-plane ahead
+    of ``line`` (``_ahead_of_first_cones``), unchanged when it is None."""
+    if line is None:
+        return pred, truth
+    half = _half_plane(*line)
+    return shapely.intersection(pred, half), truth.intersection(half)
+
+
+def true_polygon(frame: Frame, sides: tuple[np.ndarray, np.ndarray] | None = None) -> Polygon:
+    """The true lane polygon that the protocol's IoU compares with, before the clip ahead of
+    the first true cones: ``true_sides`` (or ``sides``, when already computed) as one polygon,
+    closed for a closed truth."""
+    gl, gr = true_sides(frame) if sides is None else sides
+    return geo.lane_polygon(gl, gr, closed=frame.gt_closed)
 
 
 def true_sides(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
@@ -174,7 +189,7 @@ def candidate_ious(frame: Frame, candidates) -> np.ndarray:
     the candidates with shapely; CLC's ranker trains on it (``clc.train``)."""
     cones = frame.cones
     gl, gr = true_sides(frame)
-    truth = geo.lane_polygon(gl, gr, closed=frame.gt_closed)
+    truth = true_polygon(frame, (gl, gr))
     polys = np.array([geo.lane_polygon(cones[np.asarray(a, dtype=np.int64)],
                                        cones[np.asarray(b, dtype=np.int64)], closed=c)
                       for a, b, c in candidates], dtype=object)
@@ -218,10 +233,7 @@ def lane_iou20(
         return math.nan
     pl, pr, gl, gr = (truncate_polyline(_from_line(x, *line), IOU20_HORIZON_M)
                       for x in (pred_left, pred_right, gt_left, gt_right))
-    half = _half_plane(*line)
-    a = geo.lane_polygon(pl, pr).intersection(half)
-    b = geo.lane_polygon(gl, gr).intersection(half)
-    return _iou(a, b)
+    return _iou(*_clip_ahead(geo.lane_polygon(pl, pr), geo.lane_polygon(gl, gr), line))
 
 
 @dataclass(frozen=True)
@@ -272,7 +284,7 @@ def side_divergence(
     skip = np.zeros(cones.shape[0], dtype=bool) if skippable is None else skippable
     kept = np.flatnonzero(~skip[raw]) if raw.size else np.zeros(0, dtype=np.int64)
     pred = raw[kept]
-    gt_pos = {int(c): k for k, c in enumerate(gt)}
+    gt_pos = {int(c): k for k, c in enumerate(gt)} if skippable is not None else {}
 
     def stood_in(i: int, j: int) -> int:
         """The position in ``gt`` reached when pred[i] follows gt[j] over passed-over points
