@@ -42,6 +42,12 @@ from rld.types import LaneParams, Pose
 
 P = LaneParams()
 TIE = 1e-6  # objective tolerance (CP-SAT and HiGHS agree with numpy to about 1e-9)
+# How far from the true optimum a backend's "optimal" may be. HiGHS closes the gap to 1e-7
+# (rld.backends.highs). CP-SAT stops at its default absolute_gap_limit of 1e-4, in an
+# objective it scales to integers, so its bound is not exact either: seed 103527, n = 10 gave
+# an incumbent of -9.995247, a "proven" bound of -9.995315 and a CLC candidate at -9.995330
+# (the backends' own agreement test, tests/test_rld.py, allows 1e-4).
+OPT_TOL = {"cpsat": 2e-4, "highs": TIE}
 
 
 def track_instance(seed: int, n: int) -> tuple[np.ndarray, Pose]:
@@ -131,6 +137,7 @@ def cross_check(seed: int, n: int, backend: str = "cpsat") -> dict:
     res = enumerate_candidates(points, pose, P, max_iterations=0, start=start)
     assert res.complete
     opt, lane, prog = rld_optimum(points, pose, start, backend)
+    tol = OPT_TOL[backend]
     fired = {"candidates": len(res.candidates)}
     rld_feasible_costs = []
     for left, right, closed in res.candidates:
@@ -143,9 +150,10 @@ def cross_check(seed: int, n: int, backend: str = "cpsat") -> dict:
         assert prog.objective(x) == pytest.approx(cost, abs=1e-9)
         if prog.is_feasible(x):
             rld_feasible_costs.append((cost, left, right))
-    # (b) RLD is optimal over a superset of the RLD-feasible candidates.
+    # (b) RLD is optimal (to the backend's tolerance) over a superset of the RLD-feasible
+    # candidates.
     for cost, left, right in rld_feasible_costs:
-        assert cost >= opt - TIE, (seed, n, left, right, cost, opt)
+        assert cost >= opt - tol, (seed, n, left, right, cost, opt)
     fired["rld_feasible_candidates"] = len(rld_feasible_costs)
     if lane is None:
         # Infeasible, or an optimum whose paths do not start at the two start cones: no CLC
@@ -163,9 +171,10 @@ def cross_check(seed: int, n: int, backend: str = "cpsat") -> dict:
     keys = {(tuple(a.tolist()), tuple(b.tolist())) for _, a, b in rld_feasible_costs}
     assert (tuple(left.tolist()), tuple(right.tolist())) in keys
     best = min(c for c, _, _ in rld_feasible_costs)
-    assert best == pytest.approx(opt, abs=TIE)
-    # (d) a unique minimum is the same lane on both sides.
-    at_best = [(a, b) for c, a, b in rld_feasible_costs if c <= best + TIE]
+    assert best == pytest.approx(opt, abs=tol)
+    # (d) a unique minimum (no other candidate within the tolerance) is the same lane on both
+    # sides.
+    at_best = [(a, b) for c, a, b in rld_feasible_costs if c <= best + tol]
     if len(at_best) == 1:
         fired["identical_lane"] = True
         assert np.array_equal(at_best[0][0], left) and np.array_equal(at_best[0][1], right)
