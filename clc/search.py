@@ -224,10 +224,21 @@ def _arc_behind(points: np.ndarray, path: np.ndarray, pose: Pose) -> float:
                                math.cos(pose.yaw), math.sin(pose.yaw)))
 
 
+def path_ahead(points: np.ndarray, path: np.ndarray, pose: Pose) -> float:
+    """Path length (metres) of ``path`` ahead of the car: its whole length less ``_arc_behind``
+    (0 for a path of one cone, or one wholly behind the car)."""
+    path = np.ascontiguousarray(path, dtype=np.int64)
+    if path.size < 2:
+        return 0.0
+    seg = np.diff(points[path], axis=0)
+    return max(float(np.hypot(seg[:, 0], seg[:, 1]).sum()) - _arc_behind(points, path, pose),
+               0.0)
+
+
 def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
                     start: tuple[int, int], left: np.ndarray, right: np.ndarray,
                     margin: float, reach_m: float, iterations: int,
-                    skip: set | None = None) -> list[SearchResult]:
+                    skip: set | None = None, cut_other: bool = False) -> list[SearchResult]:
     """Searches that revisit the close calls of a lane found under the iteration limit (our
     addition, docs/clc.md). The depth-first search changes a choice near the car only after it
     has exhausted everything beyond it, which under it_max it never does. For every position j
@@ -241,8 +252,14 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
     runner-up is the cone skipped, the one taken comes after it). When that search did take the
     cone again somewhere, a second one bans it outright (``banned``), so it cannot find its way
     back to the same lane. Returns one result per search, in order (left first). ``skip``: the
-    close calls already revisited, as (side, path up to and with the cone, other boundary) keys;
-    the ones revisited here are added to it and not run again."""
+    close calls already revisited, as (side, path up to and with the cone, other boundary,
+    ``cut_other``) keys; the ones revisited here are added to it and not run again.
+
+    ``cut_other``: the guide keeps of the other boundary only its cones up to and with the one
+    nearest path[j - 1] (the last cone kept on this side), so the dive rebuilds both boundaries
+    from beside the choice. For a lane that stops short (``clc.solver.SHORT_LANE_M``): when a
+    wrong choice on one side has taken a cone of the other boundary, that side was bent to
+    match, and a dive that kept it whole could not reach the true lane."""
     out = []
     hx, hy = float(np.cos(pose.yaw)), float(np.sin(pose.yaw))
     left = np.ascontiguousarray(left, dtype=np.int64)
@@ -260,11 +277,15 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
                                                        reach))
         for j in pos:
             if skip is not None:
-                key = (side, path[:j + 1].tobytes(), other.tobytes())
+                key = (side, path[:j + 1].tobytes(), other.tobytes(), cut_other)
                 if key in skip:
                     continue
                 skip.add(key)
-            guide = (left[:j], right) if side == 0 else (left, right[:j])
+            kept = other
+            if cut_other and other.size > 1:
+                d = points[other] - points[path[j - 1]]
+                kept = other[: int(np.argmin(np.hypot(d[:, 0], d[:, 1]))) + 1]
+            guide = (left[:j], kept) if side == 0 else (kept, right[:j])
             cone = int(path[j])
             res = enumerate_candidates(points, pose, params, max_iterations=iterations,
                                        graph=graph, start=start, guide=guide,
@@ -350,6 +371,51 @@ def drop_detours(points: np.ndarray, pose: Pose, params: LaneParams, graph: Sear
         if not applied:
             break
     return paths[0], paths[1], dropped
+
+
+def drop_ring_join(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
+                   left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """Drop the first cone of a boundary of a *closed* lane when RLD's objective of the closed
+    lane (eq. 29, ``rld.costs.lane_cost(closed=True)``) is lower without it and the ring
+    without it is still a lane (an edge of the search graph joins the ring's last cone to its
+    second, and ``lane_is_feasible(closed=True)`` holds). Our addition, docs/clc.md.
+
+    The search starts each boundary at a start vertex (IV-C). When a false positive beside the
+    car pairs better with the other side than the true cone next to it, the closed lane keeps
+    it as a detour between the boundary's last true cone and its first one: the ring's join,
+    which the open-lane ``drop_detours`` does not see. Only the terms around the join change
+    (the edges into and out of the cone, the turns at it and at its two neighbours), so the
+    objective's change is computed on the five cones around it (``open_path_costs``); rings of
+    fewer than five cones are left alone. Each side once, left first; returns (left, right,
+    cones dropped)."""
+    paths = [np.asarray(left, dtype=np.int64), np.asarray(right, dtype=np.int64)]
+    dropped = 0
+    for side in (0, 1):
+        p = paths[side]
+        if p.size < 5 or not graph.has_edge(int(p[-1]), int(p[1])):
+            continue
+        if ring_join_change(points, pose, params, p) >= -1e-9:
+            continue
+        trial = list(paths)
+        trial[side] = p[1:]
+        if lane_is_feasible(points[trial[0]], points[trial[1]], params, closed=True):
+            paths, dropped = trial, dropped + 1
+    return paths[0], paths[1], dropped
+
+
+def ring_join_change(points: np.ndarray, pose: Pose, params: LaneParams,
+                     ring: np.ndarray) -> float:
+    """The change of RLD's objective (eq. 29) of a closed boundary ``ring`` (five cones or
+    more) when its first cone is dropped: the terms around it, the edges into and out of it,
+    the turns at it and at its two neighbours, against the edge and turns that replace them
+    (``open_path_costs`` over the five cones around it and the four without it). Equal to
+    the change of ``lane_cost(closed=True)``, which sums the same terms over the whole ring."""
+    p = np.asarray(ring, dtype=np.int64)
+    if p.size < 5:
+        raise ValueError(f"a ring of at least five cones is needed, got {p.size}")
+    seqs = np.array([p[-2], p[-1], p[0], p[1], p[2], p[-2], p[-1], p[1], p[2]])
+    cost = open_path_costs(points, seqs, np.array([0, 5, 9]), pose, params)
+    return float(cost[1] - cost[0])
 
 
 def _detour_head(points: np.ndarray, pose: Pose, graph: SearchGraph, path: np.ndarray,

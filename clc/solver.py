@@ -36,8 +36,10 @@ from clc.search import (
     closable,
     contested_dives,
     drop_detours,
+    drop_ring_join,
     enumerate_candidates,
     merge_results,
+    path_ahead,
 )
 from rld.constraints import lane_is_feasible, starting_vertex_pairs
 from rld.costs import lane_cost
@@ -63,6 +65,14 @@ DROP_DETOURS = True
 #: candidate so far has fewer than this many cones on its shorter side; the deepest wins (ties:
 #: the more symmetric pair).
 MIN_START_DEPTH = 5
+#: A winner with a boundary that reaches less than this far (metres of path ahead of the car)
+#: while the map holds cones farther ahead is *short*: besides its close calls, every choice
+#: of it within the dive reach is revisited by a dive that rebuilds the other boundary too,
+#: from beside the choice (``contested_dives(..., cut_other=True)``). 0 turns it off. 20 m is
+#: the protocol's critical distance (docs/clc.md, "Short lanes revisited").
+SHORT_LANE_M = 20.0
+#: Drop a closed lane's join cone when the ring is cheaper without it (``drop_ring_join``).
+RING_JOIN = True
 
 
 def _depth(res) -> int:
@@ -71,6 +81,19 @@ def _depth(res) -> int:
         return 0
     _, lp, _, rp, _ = res.candidates.flat()
     return int(np.minimum(np.diff(lp), np.diff(rp)).max())
+
+
+def _short(points: np.ndarray, pose: Pose, left: np.ndarray, right: np.ndarray,
+           length_m: float) -> bool:
+    """Whether a boundary of the lane reaches less than ``length_m`` metres of path ahead of
+    the car (its path length less the part behind the car, ``clc.search.path_ahead``) while
+    the map holds a cone ahead of the car (in front of the line through it across its
+    heading) farther than ``length_m`` from it: the lane stops short of what the map shows."""
+    if min(path_ahead(points, left, pose), path_ahead(points, right, pose)) >= length_m:
+        return False
+    d = points - pose.xy
+    far = (d @ pose.heading > 0.0) & (np.hypot(d[:, 0], d[:, 1]) > length_m)
+    return bool(far.any())
 
 
 def _match(prev_xy: np.ndarray, tree: cKDTree) -> np.ndarray:
@@ -158,18 +181,28 @@ class ClcModel:
         winner, where neither change alone is feasible, is reached in two steps. A close call
         is identified by the path up to and with its cone and the other boundary, and is never
         revisited twice.
-        Returns the final (left, right, closed, score), the dives run, their iterations and
-        the rounds run (a round that changes nothing ends them)."""
+        A winner that stops short of the map (``_short``, SHORT_LANE_M) also has every choice
+        within the reach revisited in that round, each of these dives rebuilding the other
+        boundary from beside the choice (``contested_dives(..., cut_other=True)``).
+        Returns the final (left, right, closed, score), the dives run, their iterations, the
+        rounds run (a round that changes nothing ends them) and the rounds whose winner was
+        short."""
         p = self.params
         done: set[tuple] = set()
-        n_dives = iterations = rounds = 0
+        n_dives = iterations = rounds = short_rounds = 0
         cost = None  # the winner's, computed once a dive has a lane to compare
         while rounds < DIVE_ROUNDS:
             rounds += 1
             left, right = winner[0], winner[1]
+            budget = DIVE_ITERATIONS + left.size + right.size
             dives = contested_dives(points, pose, p, res.graph, res.start, left, right,
-                                    p.contested_margin, DIVE_REACH_M,
-                                    DIVE_ITERATIONS + left.size + right.size, skip=done)
+                                    p.contested_margin, DIVE_REACH_M, budget, skip=done)
+            if SHORT_LANE_M > 0 and _short(points, pose, left, right, SHORT_LANE_M):
+                # A short winner: also every choice within the reach, both boundaries rebuilt.
+                short_rounds += 1
+                dives += contested_dives(points, pose, p, res.graph, res.start, left, right,
+                                         np.inf, DIVE_REACH_M, budget, skip=done,
+                                         cut_other=True)
             best, best_cost = None, cost
             for dive in dives:
                 n_dives += 1
@@ -189,7 +222,7 @@ class ClcModel:
             if best is None:
                 break
             winner, cost = best, best_cost
-        return (*winner, n_dives, iterations, rounds)
+        return (*winner, n_dives, iterations, rounds, short_rounds)
 
     def solve(self, points: np.ndarray, pose: Pose, colors=None, time_limit_s=None,
               confidence=None) -> Lane:
@@ -243,18 +276,22 @@ class ClcModel:
         left, right, closed = res.candidates[best]
         left, right = left.copy(), right.copy()
         score = float(scores[best])
-        n_dives = rounds = 0
+        n_dives = rounds = short_rounds = 0
         if not res.complete and self.params.contested_margin > 0:
-            left, right, closed, score, n_dives, it, rounds = self._dive_rounds(
+            left, right, closed, score, n_dives, it, rounds, short_rounds = self._dive_rounds(
                 points, pose, res, (left, right, closed, score))
             iterations += it
-        stats.update(dives=n_dives, dive_rounds=rounds, iterations=iterations)
+        stats.update(dives=n_dives, dive_rounds=rounds, short_lane_rounds=short_rounds,
+                     iterations=iterations)
         stats["dropped"] = 0
         if not res.complete and not closed and DROP_DETOURS:
             left, right, stats["dropped"] = drop_detours(points, pose, self.params, res.graph,
                                                          left, right, DIVE_REACH_M)
         if not closed and closable(res.graph, left, right):
             closed = lane_is_feasible(points[left], points[right], self.params, closed=True)
+        if closed and RING_JOIN:
+            left, right, n = drop_ring_join(points, pose, self.params, res.graph, left, right)
+            stats["dropped"] += n
         self._prev = (points[left].copy(), points[right].copy())
         elapsed = time.perf_counter() - t0
         if time_limit_s is not None:

@@ -23,7 +23,10 @@ from clc.search import (
     closable,
     contested_dives,
     drop_detours,
+    drop_ring_join,
     enumerate_candidates,
+    path_ahead,
+    ring_join_change,
     search_graph,
 )
 from rld import LaneParams, LaneSolver, LaneStatus, Pose, solve_lane
@@ -598,17 +601,22 @@ def test_contested_dives_take_the_runner_up_and_the_ranker_decides():
 
 def _no_cheaper_dive(points, pose, params, lane):
     """The dive rounds' fixed point: no dive from ``lane`` finds a lane that RLD's objective
-    prefers (when the rounds ended before their limit)."""
+    prefers (when the rounds ended before their limit), neither a close call's nor, for a
+    short lane, any choice's with both boundaries rebuilt."""
     from clc.ranker import get_ranker
-    from clc.solver import DIVE_ITERATIONS, DIVE_REACH_M
+    from clc.solver import DIVE_ITERATIONS, DIVE_REACH_M, SHORT_LANE_M, _short
     from rld.costs import lane_cost
     first = enumerate_candidates(points, pose, params)
     ranker = get_ranker("learned")
     here = lane_cost(points, lane.left, lane.right, pose, params, closed=lane.closed,
                      radius_m=DIVE_REACH_M)
-    for dive in contested_dives(points, pose, params, first.graph, first.start, lane.left,
-                                lane.right, params.contested_margin, DIVE_REACH_M,
-                                DIVE_ITERATIONS + lane.left.size + lane.right.size):
+    budget = DIVE_ITERATIONS + lane.left.size + lane.right.size
+    dives = contested_dives(points, pose, params, first.graph, first.start, lane.left,
+                            lane.right, params.contested_margin, DIVE_REACH_M, budget)
+    if _short(points, pose, lane.left, lane.right, SHORT_LANE_M):  # and a short lane's
+        dives += contested_dives(points, pose, params, first.graph, first.start, lane.left,
+                                 lane.right, np.inf, DIVE_REACH_M, budget, cut_other=True)
+    for dive in dives:
         if dive.candidates:
             a, b, c = dive.candidates[int(np.argmax(ranker.score(points, pose, params,
                                                                  dive.candidates,
@@ -769,3 +777,184 @@ def test_dive_judge_counts_within_the_reach_track4(dataset_dir, monkeypatch):
         lane_cost(f.cones, lane.left, lane.right, f.pose, PARAMS)
     assert lane_cost(f.cones, lane.left, lane.right, f.pose, PARAMS, radius_m=reach) < \
         lane_cost(f.cones, skip.left, skip.right, f.pose, PARAMS, radius_m=reach)
+
+
+def test_path_ahead_hand_worked():
+    """Cones at x = -2, 1, 4 and 10 (y = 1), the car at the origin heading +x: 12 m of path,
+    2 m of it behind the car, 10 m ahead. One cone, or a path wholly behind the car: 0."""
+    pts = np.array([[-2.0, 1.0], [1.0, 1.0], [4.0, 1.0], [10.0, 1.0]])
+    assert path_ahead(pts, np.arange(4), POSE) == pytest.approx(10.0)
+    assert path_ahead(pts, np.arange(1, 4), POSE) == pytest.approx(9.0)
+    assert path_ahead(pts, np.array([2]), POSE) == 0.0
+    assert path_ahead(pts, np.arange(4), Pose(20.0, 0.0, 0.0)) == 0.0
+
+
+def test_short_lane_needs_a_map_beyond_it():
+    """A lane is short when a boundary reaches less than the limit ahead of the car while the
+    map holds a cone ahead farther than the limit."""
+    from clc.solver import _short
+    xs = np.arange(0.0, 13.0, 3.0)  # 0 .. 12 m: each boundary reaches 12 m
+    left = np.column_stack([xs, np.full(xs.size, 2.0)])
+    right = np.column_stack([xs, np.full(xs.size, -2.0)])
+    L, R = np.arange(5), np.arange(5, 10)
+    near = np.vstack([left, right])
+    far = np.vstack([near, [[30.0, 0.0]]])
+    behind = np.vstack([near, [[-30.0, 0.0]]])
+    assert _short(far, POSE, L, R, 20.0)
+    assert not _short(near, POSE, L, R, 20.0)  # nothing beyond the lane's end
+    assert not _short(behind, POSE, L, R, 20.0)  # the far cone is behind the car
+    assert not _short(far, POSE, L, R, 12.0)  # 12 m reached
+    assert _short(far, POSE, L, R[:2], 12.0)  # one side 3 m
+
+
+def _ring_lane():
+    """A closed lane around a circle: 16 inner (left) cones 8 m from the centre (3.12 m
+    apart), 22 outer ones at 12 m (3.42 m apart), the car at (10, 0) heading +y, and a false
+    positive at (7.2, -1.6) between the last inner cone and the first (1.47 and 1.79 m from
+    them) that the left ring starts with."""
+    def ring(r, n):
+        a = np.arange(n) * 2 * math.pi / n
+        return r * np.column_stack([np.cos(a), np.sin(a)])
+
+    pts = np.vstack([ring(8.0, 16), ring(12.0, 22), [[7.2, -1.6]]])
+    return pts, Pose(10.0, 0.0, math.pi / 2), np.concatenate([[38], np.arange(16)]), \
+        np.arange(16, 38)
+
+
+def test_drop_ring_join_drops_a_false_start():
+    pts, pose, L, R = _ring_lane()
+    g = search_graph(pts, PARAMS)
+    assert lane_is_feasible(pts[L], pts[R], PARAMS, closed=True)
+    left, right, n = drop_ring_join(pts, pose, PARAMS, g, L, R)
+    assert n == 1 and left.tolist() == list(range(16)) and right.tolist() == R.tolist()
+    assert lane_cost(pts, left, right, pose, PARAMS, closed=True) < \
+        lane_cost(pts, L, R, pose, PARAMS, closed=True)
+    # The true ring keeps its first cone: no edge of 6.2 m joins its last cone to its second.
+    assert drop_ring_join(pts, pose, PARAMS, g, left, right)[2] == 0
+    # Nor is a false start dropped from a ring that would not be a lane without it: here the
+    # inner ring's last cone is removed as well, so the join would need a 6.2 m edge.
+    short_ring = np.concatenate([[38], np.arange(15)])
+    assert drop_ring_join(pts, pose, PARAMS, g, short_ring, R)[2] == 0
+    with pytest.raises(ValueError, match="five cones"):
+        ring_join_change(pts, pose, PARAMS, np.arange(4))
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), fp=st.booleans())
+def test_drop_ring_join_matches_brute_force(seed, fp):
+    """Brute force on random closed lanes (two noisy concentric rings, sometimes a clutter cone
+    first on one side): drop_ring_join gives what whole-ring ``lane_cost(closed=True)`` and
+    ``lane_is_feasible`` decide, side by side (left first); its five-cone objective change
+    (``ring_join_change``) is the whole objective's."""
+    rng = np.random.default_rng(seed)
+    r_in = float(rng.uniform(4.0, 12.0))
+    r_out = r_in + float(rng.uniform(2.5, 6.0))
+    n_in = max(int(round(2 * math.pi * r_in / rng.uniform(2.0, 4.5))), 5)
+    n_out = max(int(round(2 * math.pi * r_out / rng.uniform(2.0, 4.5))), 5)
+    pts = []
+    for r, n in ((r_in, n_in), (r_out, n_out)):
+        a = np.arange(n) * 2 * math.pi / n + rng.normal(0, 0.05, n)
+        pts.append((r + rng.normal(0, 0.3, (n, 1))) * np.column_stack([np.cos(a), np.sin(a)]))
+    L, R = np.arange(n_in), np.arange(n_in, n_in + n_out)
+    extra = n_in + n_out
+    side = int(rng.integers(0, 2))
+    ring_pts = pts[side]
+    # The clutter cone near the side's join (between its last cone and its first).
+    pts.append((ring_pts[-1] + ring_pts[0]) / 2 + rng.normal(0, 0.8, (1, 2)))
+    pts = np.vstack(pts)
+    pose = Pose(float(r_in + r_out) / 2, 0.0, math.pi / 2)
+    if fp:
+        if side == 0:
+            L = np.concatenate([[extra], L])
+        else:
+            R = np.concatenate([[extra], R])
+    g = search_graph(pts, PARAMS)
+    # The five-cone change is the whole ring's.
+    for side, p in enumerate((L, R)):
+        other = (R, L)[side]
+        a, b = (p, other) if side == 0 else (other, p)
+        a2, b2 = (p[1:], other) if side == 0 else (other, p[1:])
+        assert ring_join_change(pts, pose, PARAMS, p) == pytest.approx(
+            lane_cost(pts, a2, b2, pose, PARAMS, closed=True)
+            - lane_cost(pts, a, b, pose, PARAMS, closed=True), abs=1e-9)
+    got = drop_ring_join(pts, pose, PARAMS, g, L, R)
+    paths, n = [L, R], 0
+    for side in (0, 1):
+        p = paths[side]
+        if p.size < 5 or not g.has_edge(int(p[-1]), int(p[1])):
+            continue
+        trial = list(paths)
+        trial[side] = p[1:]
+        if lane_cost(pts, *trial, pose, PARAMS, closed=True) < \
+                lane_cost(pts, *paths, pose, PARAMS, closed=True) - 1e-9 and \
+                lane_is_feasible(pts[trial[0]], pts[trial[1]], PARAMS, closed=True):
+            paths, n = trial, n + 1
+    assert got[2] == n
+    assert got[0].tolist() == paths[0].tolist() and got[1].tolist() == paths[1].tolist()
+
+
+def test_ring_join_mends_track3(dataset_dir, monkeypatch):
+    """Track 3 at R = 30 m, 30 % false positives, pose 135: the map holds the whole circuit and
+    the lane is the closed loop, but its left ring starts at a false positive beside the car,
+    1.3 m from the true first cone, which paired better with the right start cone (IV-C). Its
+    ring is cheaper without it (RLD's objective -285.36 -> -287.83), and the lane no longer
+    diverges at 0 m."""
+    import clc.solver
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    lap = simulate_lap(load_dataset_track(dataset_dir, 3), range_m=30.0, fp_rate=0.3, seed=0)
+    f = lap.frame(135)
+    lanes = {}
+    for flag in (False, True):
+        monkeypatch.setattr(clc.solver, "RING_JOIN", flag)
+        lane = LaneSolver("clc").solve(f.cones, f.pose)
+        assert lane.closed
+        s = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
+        assert s.critical_tolerant is (not flag)
+        assert bool(f.source[lane.left[0]] < 0) is (not flag)  # negative: a false positive
+        lanes[flag] = lane
+    assert lanes[True].left.tolist() == lanes[False].left[1:].tolist()
+    assert lanes[True].stats["dropped"] == lanes[False].stats["dropped"] + 1
+    costs = [lane_cost(f.cones, lanes[k].left, lanes[k].right, f.pose, PARAMS, closed=True)
+             for k in (False, True)]
+    assert costs[0] == pytest.approx(-285.36, abs=0.01)
+    assert costs[1] == pytest.approx(-287.83, abs=0.01)
+
+
+def test_short_lane_dives_mend_track6(dataset_dir, monkeypatch):
+    """Track 6 at R = 30 m, 30 % false positives, pose 165: at a hairpin 10 m ahead the right
+    boundary goes straight on to a false positive and then takes the left boundary's next
+    cone, the left one bends onto another false positive, and the lane ends 14 m ahead (the
+    truth goes round the whole circuit). No close call is flagged: the true right cone turns
+    58 degrees, the false positive 2. As a short lane every choice within the reach is
+    revisited, each dive rebuilding the other boundary from beside the choice, and the lane
+    follows the hairpin. Keeping the other boundary whole (the close-call dives' guide) is not
+    enough: the left one, bent onto the false positive, leaves no room for the true right."""
+    import clc.solver
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    lap = simulate_lap(load_dataset_track(dataset_dir, 6), range_m=30.0, fp_rate=0.3, seed=0)
+    f = lap.frame(165)
+
+    def run():
+        lane = LaneSolver("clc").solve(f.cones, f.pose)
+        s = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
+        ahead = min(path_ahead(f.cones, lane.left, f.pose),
+                    path_ahead(f.cones, lane.right, f.pose))
+        return s.critical_tolerant, ahead
+
+    monkeypatch.setattr(clc.solver, "SHORT_LANE_M", 0.0)
+    critical, ahead = run()
+    assert critical and ahead < 15.0
+    monkeypatch.setattr(clc.solver, "SHORT_LANE_M", 20.0)
+    critical, ahead = run()
+    assert not critical and ahead > 40.0
+    whole = clc.solver.contested_dives
+
+    def keep_other(*args, cut_other=False, **kwargs):
+        return whole(*args, cut_other=False, **kwargs)
+
+    monkeypatch.setattr(clc.solver, "contested_dives", keep_other)
+    assert run()[0]
