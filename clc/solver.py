@@ -230,7 +230,8 @@ class ClcModel:
         stats: dict = {"ranker": self.ranker_name, "graph": self.graph}
         pairs = starting_vertex_pairs(points, pose, self.params.near_radius_m,
                                       int(self.params.start_pairs),
-                                      self.params.start_min_width_m)
+                                      self.params.start_min_width_m,
+                                      self.params.start_behind_m)
         start = pairs[0] if pairs else None
         guide = None
         if self.warm_start and self._prev is not None and start is not None:

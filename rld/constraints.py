@@ -19,6 +19,8 @@ Where a paper's inequality is strict, or printed the wrong way round, we state o
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -321,13 +323,16 @@ def lane_is_feasible(left: np.ndarray, right: np.ndarray, params, closed: bool =
 
 
 def starting_vertex_pairs(
-    points: np.ndarray, pose: Pose, radius_m: float, k: int = 1, min_width_m: float = 0.0
+    points: np.ndarray, pose: Pose, radius_m: float, k: int = 1, min_width_m: float = 0.0,
+    max_behind_m: float = math.inf,
 ) -> list[tuple[int, int]]:
     """The ``k`` best (left, right) start pairs of CLC's ``find_starting_vertices`` (IV-C),
     best first (see there); fewer when fewer pairs exist, none when a side has no candidate.
     Pairs whose two cones are less than ``min_width_m`` apart (metres) come after every wider
     pair, in the same order among themselves (our addition, ``LaneParams.start_min_width_m``;
-    0, the default, is the paper's order)."""
+    0, the default, is the paper's order). Within each of those two groups, pairs with a cone
+    more than ``max_behind_m`` metres behind the car (along its heading) come after the others
+    (our addition, ``LaneParams.start_behind_m``; inf, the default, is the paper's order)."""
     near = np.flatnonzero(near_car_mask(points, pose, radius_m))
     if near.size < 2:
         return []
@@ -340,11 +345,13 @@ def starting_vertex_pairs(
     asym = np.hypot(dx, ll[:, None, 1] + rl[None, :, 1])  # left cone mirrored to the right
     narrow = np.hypot(dx, ll[:, None, 1] - rl[None, :, 1]) < float(min_width_m)
     reach = np.hypot(ll[:, 0], ll[:, 1])[:, None] + np.hypot(rl[:, 0], rl[:, 1])[None, :]
+    behind = (ll[:, 0] < -max_behind_m)[:, None] | (rl[:, 0] < -max_behind_m)[None, :]
     li, ri = np.meshgrid(lefts, rights, indexing="ij")
-    # Wide enough first; then most symmetric; among equals (to a micrometre) the pair nearest
-    # the car, then the lowest indices, so the choice does not depend on the order of the input.
+    # Wide enough first; then not far behind the car; then most symmetric; among equals (to a
+    # micrometre) the pair nearest the car, then the lowest indices, so the choice does not
+    # depend on the order of the input.
     order = np.lexsort((ri.ravel(), li.ravel(), reach.ravel(), np.round(asym.ravel(), 6),
-                        narrow.ravel()))
+                        behind.ravel(), narrow.ravel()))
     return [(int(li.ravel()[q]), int(ri.ravel()[q])) for q in order[: max(int(k), 1)]]
 
 

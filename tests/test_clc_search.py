@@ -958,3 +958,24 @@ def test_short_lane_dives_mend_track6(dataset_dir, monkeypatch):
 
     monkeypatch.setattr(clc.solver, "contested_dives", keep_other)
     assert run()[0]
+
+
+def test_start_pair_far_behind_comes_later_track2(dataset_dir):
+    """Track 2 at R = 50 m, 30 % false positives, pose 48: the most symmetric start pair is a
+    true left cone 3.1 m behind the car and a false positive 3.3 m behind it (2.3 and 3.0 m
+    either side), and the right boundary starts with the false positive. Pairs with a cone more
+    than ``start_behind_m`` (2.5 m) behind the car go later: the lane starts at the true cones
+    beside the car (0.9 m ahead and 0.4 m behind)."""
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    lap = simulate_lap(load_dataset_track(dataset_dir, 2), range_m=50.0, fp_rate=0.3, seed=0)
+    f = lap.frame(48)
+    for behind, critical in ((PARAMS.near_radius_m, True), (PARAMS.start_behind_m, False)):
+        lane = LaneSolver("clc", params=LaneParams(start_behind_m=behind)).solve(f.cones,
+                                                                               f.pose)
+        s = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
+        assert s.critical_tolerant is critical
+        start = list(lane.stats["start"])
+        assert bool((f.source[start] < 0).any()) is critical  # negative: a false positive
+        assert bool((f.pose.to_local(f.cones[start])[:, 0] < -behind).any()) is False

@@ -461,3 +461,24 @@ def test_starting_vertex_pairs_narrow_pairs_come_last():
     # Every pair narrow: the paper's order again.
     assert C.starting_vertex_pairs(pts, CAR, 4.5, 4, min_width_m=5.0) == \
         C.starting_vertex_pairs(pts, CAR, 4.5, 4)
+
+
+def test_starting_vertex_pairs_far_behind_come_later():
+    # Car frame, metres: left cones 0 (3.4 m behind, the false positive of track 2, pose 48)
+    # and 2 (beside the car), right cones 1 and 3. Asymmetries |mirror(left) - right| by hand:
+    # (0, 1) 0.28, (2, 3) 0.50, (2, 1) 3.42, (0, 3) 3.91. Widths: (0, 1) 3.81, (2, 3) 4.01,
+    # (2, 1) 5.25, (0, 3) 5.45.
+    pts = np.array([[-3.4, 2.0], [-3.2, -1.8], [0.2, 2.2], [0.5, -1.8]], float)
+    assert C.starting_vertex_pairs(pts, CAR, 4.5, 4) == [(0, 1), (2, 3), (2, 1), (0, 3)]
+    # Pairs with a cone more than 2.5 m behind go after the others, in the same order.
+    assert C.starting_vertex_pairs(pts, CAR, 4.5, 4, max_behind_m=2.5) == [
+        (2, 3), (0, 1), (2, 1), (0, 3)]
+    assert C.starting_vertex_pairs(pts, CAR, 4.5, 4, max_behind_m=3.3) == [
+        (2, 3), (2, 1), (0, 1), (0, 3)]  # only cone 0 is farther behind than 3.3 m
+    assert C.starting_vertex_pairs(pts, CAR, 4.5, 4, max_behind_m=3.5) == \
+        C.starting_vertex_pairs(pts, CAR, 4.5, 4)
+    # Narrow pairs still go last, (0, 1) at 3.9 m; the behind rule orders within each group.
+    got = C.starting_vertex_pairs(pts, CAR, 4.5, 4, min_width_m=3.9, max_behind_m=2.5)
+    assert got == [(2, 3), (2, 1), (0, 3), (0, 1)]
+    got = C.starting_vertex_pairs(pts, CAR, 4.5, 4, min_width_m=4.1, max_behind_m=2.5)
+    assert got == [(2, 1), (0, 3), (2, 3), (0, 1)]  # (2, 3) narrow too
