@@ -23,6 +23,7 @@ import numpy as np
 from scipy.spatial import Delaunay
 
 from clc import search_kernels as sk
+from rld import geometry as geo
 from rld.constraints import candidate_edges, find_starting_vertices, lane_is_feasible
 from rld.costs import open_path_costs, ranking_features
 from rld.types import LaneParams, Pose
@@ -230,9 +231,7 @@ def path_ahead(points: np.ndarray, path: np.ndarray, pose: Pose) -> float:
     path = np.ascontiguousarray(path, dtype=np.int64)
     if path.size < 2:
         return 0.0
-    seg = np.diff(points[path], axis=0)
-    return max(float(np.hypot(seg[:, 0], seg[:, 1]).sum()) - _arc_behind(points, path, pose),
-               0.0)
+    return max(geo.polyline_length(points[path]) - _arc_behind(points, path, pose), 0.0)
 
 
 def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
