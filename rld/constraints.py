@@ -241,10 +241,7 @@ def c_poly(left: np.ndarray, right: np.ndarray, closed: bool = False) -> bool:
         return geo.ring_is_simple(geo.lane_ring(left, right))
     if not (geo.ring_is_simple(left) and geo.ring_is_simple(right)):
         return False
-    L, R = _closed(left, True), _closed(right, True)
-    a0, a1 = L[:-1][:, None, :], L[1:][:, None, :]
-    b0, b1 = R[:-1][None, :, :], R[1:][None, :, :]
-    return not bool(np.any(geo.segments_intersect(a0, a1, b0, b1)))
+    return not geo.polylines_touch(_closed(left, True), _closed(right, True))
 
 
 def lane_widths(left: np.ndarray, right: np.ndarray, closed: bool = False) -> np.ndarray:

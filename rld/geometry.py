@@ -21,6 +21,7 @@ __all__ = [
     "segment_distance_end",
     "segments_intersect",
     "segments_cross",
+    "polylines_touch",
     "turn_angles",
     "polyline_turn_angles",
     "polyline_length",
@@ -81,6 +82,14 @@ def segments_intersect(a0, a1, b0, b1) -> np.ndarray:
     out = np.empty(a0.shape[0], dtype=np.bool_)
     gk.segments_intersect_many(a0, a1, b0, b1, out)
     return out.reshape(shape)
+
+
+def polylines_touch(p: np.ndarray, q: np.ndarray) -> bool:
+    """Some segment of the polyline ``p`` (k, 2) shares a point with some segment of ``q``
+    (m, 2): ``segments_intersect`` over every pair, with a bounding-box test first. A polyline
+    of fewer than two points has no segment and touches nothing."""
+    return bool(gk.polylines_touch(np.ascontiguousarray(p, dtype=np.float64).reshape(-1, 2),
+                                   np.ascontiguousarray(q, dtype=np.float64).reshape(-1, 2)))
 
 
 def segments_cross(a0, a1, b0, b1) -> np.ndarray:

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
 EPS = 1e-9
@@ -67,7 +66,15 @@ def _on_segment(px, py, ax, ay, bx, by):
 
 @njit(cache=True)
 def segments_intersect(ax, ay, bx, by, cx, cy, dx, dy):
-    """Closed segments ab and cd share at least one point (crossing, touching or overlapping)."""
+    """Closed segments ab and cd share at least one point (crossing, touching or overlapping).
+
+    Bounding boxes apart by more than EPS share no point. The test comes first: for two
+    distant segments on one line the orientations are rounding noise of either sign, and the
+    crossing test alone then reports a crossing (seen 2026-12-02 on a generated straight, two
+    segments 37 m apart)."""
+    if (min(cx, dx) > max(ax, bx) + EPS or max(cx, dx) < min(ax, bx) - EPS
+            or min(cy, dy) > max(ay, by) + EPS or max(cy, dy) < min(ay, by) - EPS):
+        return False
     o1 = orient(ax, ay, bx, by, cx, cy)
     o2 = orient(ax, ay, bx, by, dx, dy)
     o3 = orient(cx, cy, dx, dy, ax, ay)
@@ -90,7 +97,11 @@ def segments_intersect(ax, ay, bx, by, cx, cy, dx, dy):
 @njit(cache=True)
 def segments_cross(ax, ay, bx, by, cx, cy, dx, dy):
     """Proper intersection: ab and cd cross at a single point interior to both (touching at an
-    endpoint or overlapping collinearly does not count)."""
+    endpoint or overlapping collinearly does not count). Bounding boxes apart cannot cross
+    (the test comes first, as in ``segments_intersect``)."""
+    if (min(cx, dx) > max(ax, bx) or max(cx, dx) < min(ax, bx) or min(cy, dy) > max(ay, by)
+            or max(cy, dy) < min(ay, by)):
+        return False
     o1 = orient(ax, ay, bx, by, cx, cy)
     o2 = orient(ax, ay, bx, by, dx, dy)
     o3 = orient(cx, cy, dx, dy, ax, ay)
@@ -238,24 +249,45 @@ def turn_angle_many(a, b, c, out):
 
 
 @njit(cache=True)
-def point_polyline_distance(px, py, poly):
-    """Distance from point p to the polyline ``poly`` (k, 2); a single point if k == 1."""
-    k = poly.shape[0]
-    if k == 1:
-        return math.hypot(px - poly[0, 0], py - poly[0, 1])
-    best = np.inf
-    for i in range(k - 1):
-        d = point_segment_distance(px, py, poly[i, 0], poly[i, 1], poly[i + 1, 0], poly[i + 1, 1])
+def point_polyline_nearest(px, py, poly, seed):
+    """Distance from point p to the polyline ``poly`` (k >= 2, 2) and the index of a nearest
+    segment; segment ``seed`` is tried first (a good guess prunes the rest)."""
+    j = seed
+    best = point_segment_distance(px, py, poly[j, 0], poly[j, 1], poly[j + 1, 0], poly[j + 1, 1])
+    for i in range(poly.shape[0] - 1):
+        ax, ay, bx, by = poly[i, 0], poly[i, 1], poly[i + 1, 0], poly[i + 1, 1]
+        # The gap to the segment's bounding box bounds its distance from below: skip it when
+        # that already reaches the best (exact: the minimum cannot change).
+        gx = max(min(ax, bx) - px, px - max(ax, bx), 0.0)
+        gy = max(min(ay, by) - py, py - max(ay, by), 0.0)
+        if gx * gx + gy * gy >= best * best:
+            continue
+        d = point_segment_distance(px, py, ax, ay, bx, by)
         if d < best:
             best = d
-    return best
+            j = i
+    return best, j
+
+
+@njit(cache=True)
+def point_polyline_distance(px, py, poly):
+    """Distance from point p to the polyline ``poly`` (k, 2); a single point if k == 1."""
+    if poly.shape[0] == 1:
+        return math.hypot(px - poly[0, 0], py - poly[0, 1])
+    d, _ = point_polyline_nearest(px, py, poly, 0)
+    return d
 
 
 @njit(cache=True)
 def point_polyline_distance_many(p, poly, out):
     """out[i] = distance from p[i] to the polyline ``poly`` (k >= 1, 2)."""
+    if poly.shape[0] == 1:
+        for i in range(p.shape[0]):
+            out[i] = math.hypot(p[i, 0] - poly[0, 0], p[i, 1] - poly[0, 1])
+        return
+    near = 0  # the previous point's nearest segment: consecutive points are near each other
     for i in range(p.shape[0]):
-        out[i] = point_polyline_distance(p[i, 0], p[i, 1], poly)
+        out[i], near = point_polyline_nearest(p[i, 0], p[i, 1], poly, near)
 
 
 @njit(cache=True)
@@ -263,17 +295,26 @@ def polyline_segments_distance_many(q, poly, out):
     """out[i] = least distance from the segment q[i]-q[i+1] to the polyline ``poly`` (k >= 1,
     2; one point when k == 1), for i < len(q) - 1."""
     k = poly.shape[0]
+    near = 0  # the previous query's nearest segment: consecutive queries are near each other
     for i in range(q.shape[0] - 1):
         ax, ay, bx, by = q[i, 0], q[i, 1], q[i + 1, 0], q[i + 1, 1]
         if k == 1:
             out[i] = point_segment_distance(poly[0, 0], poly[0, 1], ax, ay, bx, by)
             continue
-        best = np.inf
+        x0, x1, y0, y1 = min(ax, bx), max(ax, bx), min(ay, by), max(ay, by)
+        best = segment_distance(ax, ay, bx, by, poly[near, 0], poly[near, 1], poly[near + 1, 0],
+                                poly[near + 1, 1])
         for j in range(k - 1):
-            d = segment_distance(ax, ay, bx, by, poly[j, 0], poly[j, 1], poly[j + 1, 0],
-                                 poly[j + 1, 1])
+            cx, cy, dx, dy = poly[j, 0], poly[j, 1], poly[j + 1, 0], poly[j + 1, 1]
+            # The gap between the two bounding boxes bounds the distance from below.
+            gx = max(min(cx, dx) - x1, x0 - max(cx, dx), 0.0)
+            gy = max(min(cy, dy) - y1, y0 - max(cy, dy), 0.0)
+            if gx * gx + gy * gy >= best * best:
+                continue
+            d = segment_distance(ax, ay, bx, by, cx, cy, dx, dy)
             if d < best:
                 best = d
+                near = j
         out[i] = best
 
 
@@ -291,17 +332,40 @@ def polyline_self_intersects(ring):
         by = ring[(i + 1) % k, 1]
         if ax == bx and ay == by:
             return True
+        x0, x1, y0, y1 = min(ax, bx), max(ax, bx), min(ay, by), max(ay, by)
         for j in range(i + 1, k):
             cx = ring[j, 0]
             cy = ring[j, 1]
             dx = ring[(j + 1) % k, 0]
             dy = ring[(j + 1) % k, 1]
             adjacent = j == i + 1 or (i == 0 and j == k - 1)
+            if (not adjacent and (min(cx, dx) > x1 + EPS or max(cx, dx) < x0 - EPS
+                                  or min(cy, dy) > y1 + EPS or max(cy, dy) < y0 - EPS)):
+                continue  # bounding boxes apart: no shared point
             if adjacent:
                 # Adjacent edges share one vertex and may touch only there (no fold-back).
                 _, end = segment_distance_end(ax, ay, bx, by, cx, cy, dx, dy)
                 if not end:
                     return True
             elif segments_intersect(ax, ay, bx, by, cx, cy, dx, dy):
+                return True
+    return False
+
+
+@njit(cache=True)
+def polylines_touch(p, q):
+    """Whether any segment of the polyline ``p`` (k, 2) shares a point with any segment of the
+    polyline ``q`` (m, 2) (``segments_intersect``: crossing, touching or overlapping). A
+    polyline of fewer than two points has no segment and touches nothing."""
+    for i in range(p.shape[0] - 1):
+        ax, ay, bx, by = p[i, 0], p[i, 1], p[i + 1, 0], p[i + 1, 1]
+        x0, x1, y0, y1 = min(ax, bx), max(ax, bx), min(ay, by), max(ay, by)
+        for j in range(q.shape[0] - 1):
+            cx, cy, dx, dy = q[j, 0], q[j, 1], q[j + 1, 0], q[j + 1, 1]
+            # Bounding boxes apart (beyond _on_segment's EPS): no shared point.
+            if (min(cx, dx) > x1 + EPS or max(cx, dx) < x0 - EPS or min(cy, dy) > y1 + EPS
+                    or max(cy, dy) < y0 - EPS):
+                continue
+            if segments_intersect(ax, ay, bx, by, cx, cy, dx, dy):
                 return True
     return False

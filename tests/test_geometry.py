@@ -392,6 +392,26 @@ def test_intersect_and_cross_hand_worked(a0, a1, b0, b1, inter, cross):
         assert bool(geo.segments_cross(*args)) is cross
 
 
+def test_distant_segments_on_one_line_do_not_meet():
+    # Two segments of a generated straight, 37 m apart on one line (rld.generator, seed 103):
+    # their orientations are rounding noise of either sign, and before the bounding-box test
+    # segments_intersect and segments_cross reported a crossing (ring_is_simple then rejected a
+    # simple ring).
+    a0, a1 = (-25.531440777696847, 54.26752450441628), (-25.751177244794352, 53.29185851998294)
+    b0, b1 = (-33.8814265274021, 17.192217095949008), (-34.1011629944996, 16.216551111515667)
+    for args in [(a0, a1, b0, b1), (b0, b1, a0, a1), (a1, a0, b1, b0)]:
+        assert not bool(geo.segments_intersect(*args))
+        assert not bool(geo.segments_cross(*args))
+        assert float(geo.segment_distance(*args)) > 30.0
+    # The same along a whole noise-free straight: a long thin ring is simple.
+    xs = np.linspace(0.0, 60.0, 31)
+    t = np.column_stack([-25.5 - 0.2197 * xs, 54.27 - 0.9757 * xs])
+    n = np.array([0.9757, -0.2197])
+    ring = np.vstack([t, (t + 3.0 * n)[::-1]])
+    assert geo.ring_is_simple(ring)
+    assert geo.ring_is_simple(ring) is Polygon(ring).is_valid
+
+
 @settings(max_examples=300, deadline=None)
 @given(int_pt, int_pt, int_pt, int_pt, exact_scale)
 def test_segments_intersect_matches_shapely(a0, a1, b0, b1, k):
@@ -714,6 +734,42 @@ def test_polyline_segments_distance_matches_pairwise_and_shapely(q, poly):
                       for a, b in zip(poly[:-1], poly[1:], strict=True))
             assert got[i] == pytest.approx(shp, abs=1e-8)
         assert got[i] == pytest.approx(want, abs=1e-12)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(any_pt, min_size=1, max_size=12), st.lists(any_pt, min_size=1, max_size=12))
+def test_point_polyline_distance_matches_pairwise(p, poly):
+    # The kernel tries the previous point's nearest segment first and skips segments whose
+    # bounding box is already farther: the minimum over every segment must not change.
+    p, poly = np.array(p, float), np.array(poly, float)
+    got = geo.point_polyline_distance(p, poly)
+    for i in range(len(p)):
+        if len(poly) == 1:
+            want = float(np.hypot(*(p[i] - poly[0])))
+        else:
+            want = float(geo.point_segment_distance(p[i], poly[:-1], poly[1:]).min())
+        assert got[i] == pytest.approx(want, abs=1e-12)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(any_pt, min_size=0, max_size=8), st.lists(any_pt, min_size=0, max_size=8))
+def test_polylines_touch_matches_every_segment_pair(p, q):
+    # Integer points make touching, overlapping and collinear pairs common.
+    p, q = np.array(p, float).reshape(-1, 2), np.array(q, float).reshape(-1, 2)
+    want = any(bool(geo.segments_intersect(p[i], p[i + 1], q[j], q[j + 1]))
+               for i in range(len(p) - 1) for j in range(len(q) - 1))
+    assert geo.polylines_touch(p, q) is want
+    assert geo.polylines_touch(q, p) is want
+
+
+def test_polylines_touch_hand_worked():
+    a = np.array([[0, 0], [4, 0], [4, 4]], float)
+    assert geo.polylines_touch(a, np.array([[2, -1], [2, 1]], float))  # crossing
+    assert geo.polylines_touch(a, np.array([[4, 4], [6, 6]], float))  # sharing an end point
+    assert geo.polylines_touch(a, np.array([[1, 0], [3, 0]], float))  # overlapping
+    assert not geo.polylines_touch(a, np.array([[1, 1], [3, 1], [3, 3]], float))
+    assert not geo.polylines_touch(a, np.array([[2, 0]], float))  # one point: no segment
+    assert not geo.polylines_touch(a, np.zeros((0, 2)))
 
 
 @settings(max_examples=250, deadline=None)
