@@ -444,6 +444,27 @@ def test_features_match_the_shared_definition():
                                    rtol=1e-9, atol=1e-12)
 
 
+def test_width_state_grows_with_a_long_lane():
+    # The kernel keeps its width values in blocks that start at 64 frames x 64 path positions
+    # and double when the search goes deeper or the paths longer. A lane of 150 cones a side
+    # outgrows them twice; what it carries through every growth must still give the shared
+    # features and predicate, candidate by candidate, down to the whole lane.
+    xs = np.arange(150) * 3.0
+    wave = 2.0 * np.sin(xs / 25.0)
+    left = np.column_stack([xs, wave + 2.0])
+    right = np.column_stack([xs + 0.5, wave - 2.0])
+    pts = np.vstack([left, right])
+    res = enumerate_candidates(pts, POSE, PARAMS, max_iterations=2000)
+    sizes = [a.size + b.size for a, b, _ in res.candidates]
+    assert max(sizes) == 300  # the whole lane, reached past two growths
+    for k, (a, b, closed) in enumerate(res.candidates):
+        if k % 7 and sizes[k] < 290:
+            continue  # every 7th candidate, and the long ones
+        assert lane_is_feasible(pts[a], pts[b], PARAMS)
+        np.testing.assert_allclose(res.features[k], ranking_features(pts[a], pts[b], closed),
+                                   rtol=1e-9, atol=1e-9)
+
+
 def test_straight_lane_is_found_whole():
     xs = np.arange(0.0, 40.0, 4.0)
     left = np.column_stack([xs, np.full_like(xs, 1.75)])
