@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 EPS = 1e-9
@@ -369,3 +370,115 @@ def polylines_touch(p, q):
             if segments_intersect(ax, ay, bx, by, cx, cy, dx, dy):
                 return True
     return False
+
+
+@njit(cache=True)
+def _insertion_sort(a, k):
+    """Sort a[:k] in place (k is small: the neighbours of one point)."""
+    for i in range(1, k):
+        v = a[i]
+        j = i - 1
+        while j >= 0 and a[j] > v:
+            a[j + 1] = a[j]
+            j -= 1
+        a[j + 1] = v
+
+
+@njit(cache=True)
+def pairs_within(pts, r):
+    """Every pair (i, j), i < j, of the points ``pts`` (n, 2) at most ``r`` apart
+    (``math.hypot``), as an (E, 2) int64 array sorted by i, then j. A grid of cells ``r``
+    wide: each point is compared with the points of its own cell and the eight around it.
+    The grid is a dense array when it has at most 16 n + 4096 cells (any map of a track);
+    otherwise cells are numbered by the rank of their column and row among the occupied
+    ones, so any spread of finite coordinates works. ``r`` > 0 and finite (the callers
+    validate it)."""
+    n = pts.shape[0]
+    if n < 2:
+        return np.empty((0, 2), dtype=np.int64)
+    fx = np.empty(n)
+    fy = np.empty(n)
+    for i in range(n):
+        fx[i] = math.floor(pts[i, 0] / r)
+        fy[i] = math.floor(pts[i, 1] / r)
+    x0, x1, y0, y1 = fx.min(), fx.max(), fy.min(), fy.max()
+    dense = (x1 - x0 + 1.0) * (y1 - y0 + 1.0) <= 16.0 * n + 4096.0
+    if dense:
+        # Column and row from 0; a cell's key is col * w + row.
+        w = int(y1 - y0) + 1
+        ncell = (int(x1 - x0) + 1) * w
+        col = np.empty(n, dtype=np.int64)
+        row = np.empty(n, dtype=np.int64)
+        for i in range(n):
+            col[i] = int(fx[i] - x0)
+            row[i] = int(fy[i] - y0)
+        ncol = ncell // w
+    else:
+        ux = np.unique(fx)
+        uy = np.unique(fy)
+        w = uy.size
+        ncol = ux.size
+        ncell = ncol * w
+        col = np.searchsorted(ux, fx)
+        row = np.searchsorted(uy, fy)
+    # Counting sort of the points by cell: cell c holds order[start[c]:start[c + 1]].
+    start = np.zeros(ncell + 1, dtype=np.int64)
+    for i in range(n):
+        start[col[i] * w + row[i] + 1] += 1
+    for c in range(ncell):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    order = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        c = col[i] * w + row[i]
+        order[fill[c]] = i
+        fill[c] += 1
+    cap = 8 * n
+    a = np.empty(cap, dtype=np.int64)
+    b = np.empty(cap, dtype=np.int64)
+    m = 0
+    nbr = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        k = 0
+        for dx in range(-1, 2):
+            if dense:
+                tx = col[i] + dx
+                if tx < 0 or tx >= ncol:
+                    continue
+            else:
+                tx = np.searchsorted(ux, fx[i] + dx)
+                if tx == ncol or ux[tx] != fx[i] + dx:
+                    continue
+            for dy in range(-1, 2):
+                if dense:
+                    ty = row[i] + dy
+                    if ty < 0 or ty >= w:
+                        continue
+                else:
+                    ty = np.searchsorted(uy, fy[i] + dy)
+                    if ty == w or uy[ty] != fy[i] + dy:
+                        continue
+                c = tx * w + ty
+                for s in range(start[c], start[c + 1]):
+                    j = order[s]
+                    if j > i and math.hypot(pts[j, 0] - pts[i, 0],
+                                            pts[j, 1] - pts[i, 1]) <= r:
+                        nbr[k] = j
+                        k += 1
+        _insertion_sort(nbr, k)
+        if m + k > cap:
+            cap = max(2 * cap, m + k)
+            a2 = np.empty(cap, dtype=np.int64)
+            b2 = np.empty(cap, dtype=np.int64)
+            a2[:m] = a[:m]
+            b2[:m] = b[:m]
+            a = a2
+            b = b2
+        for t in range(k):
+            a[m] = i
+            b[m] = nbr[t]
+            m += 1
+    out = np.empty((m, 2), dtype=np.int64)
+    out[:, 0] = a[:m]
+    out[:, 1] = b[:m]
+    return out

@@ -44,6 +44,22 @@ def test_candidate_edges_match_brute_force(seed, n, spacing):
     assert C.candidate_edges(pts, spacing).tolist() == brute
 
 
+@settings(max_examples=60)
+@given(st.integers(0, 10_000), st.integers(2, 40), st.floats(0.5, 8.0),
+       st.floats(1e3, 1e9))
+def test_candidate_edges_match_brute_force_on_a_sparse_grid(seed, n, spacing, far):
+    # Clusters far apart make the dense grid too large: the kernel then numbers the occupied
+    # columns and rows (rld.geometry_kernels.pairs_within). Negative coordinates too.
+    rng = np.random.default_rng(seed)
+    pts = random_points(seed, n) + rng.choice([-far, 0.0, far], size=(n, 2))
+    brute = [
+        [i, j]
+        for i, j in itertools.combinations(range(n), 2)
+        if math.dist(pts[i], pts[j]) <= spacing
+    ]
+    assert C.candidate_edges(pts, spacing).tolist() == brute
+
+
 # --- pairwise width conflicts (RLD eqs 6-8) and crossings -------------------------------------
 
 
