@@ -76,12 +76,7 @@ def search_graph(points: np.ndarray, params: LaneParams, kind: str = "radius") -
         edges = _delaunay_edges(points, params.max_cone_spacing_m)
     else:
         raise ValueError(f"unknown search graph {kind!r}; use one of {GRAPHS}")
-    both = np.concatenate([edges, edges[:, ::-1]]) if edges.size else np.zeros((0, 2), np.int64)
-    order = np.lexsort((both[:, 1], both[:, 0]))
-    both = both[order]
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(both[:, 0], minlength=n), out=indptr[1:])
-    indices = np.ascontiguousarray(both[:, 1], dtype=np.int64)
+    indptr, indices = sk.csr_from_edges(np.ascontiguousarray(edges, dtype=np.int64), n)
     return SearchGraph(edges=edges, indptr=indptr, indices=indices,
                        longest_m=float(sk.dead_end_score(points, indptr, indices, 0.0, 1.0)))
 

@@ -157,6 +157,31 @@ def _choose_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx,
 
 
 @njit(cache=True)
+def csr_from_edges(edges, n):
+    """The search graph in CSR form from its edges (E, 2), i < j, sorted by (i, j) (as
+    ``rld.constraints.candidate_edges`` returns them): ``(indptr (n + 1,), indices (2E,))``,
+    each vertex's neighbours sorted by index. One pass fills both ends: vertex v receives its
+    smaller neighbours (edges (i, v), i < v) before its larger ones (edges (v, j)), each in
+    increasing order."""
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    for e in range(edges.shape[0]):
+        indptr[edges[e, 0] + 1] += 1
+        indptr[edges[e, 1] + 1] += 1
+    for v in range(n):
+        indptr[v + 1] += indptr[v]
+    fill = indptr[:-1].copy()
+    indices = np.empty(2 * edges.shape[0], dtype=np.int64)
+    for e in range(edges.shape[0]):
+        a = edges[e, 0]
+        b = edges[e, 1]
+        indices[fill[a]] = b
+        fill[a] += 1
+        indices[fill[b]] = a
+        fill[b] += 1
+    return indptr, indices
+
+
+@njit(cache=True)
 def dead_end_score(pts, adj_ptr, adj_idx, max_turn, dist_weight):
     """The look-ahead's score of a cone with no step onward: the worst step the graph holds,
     phi_max + dist_weight * its longest edge."""

@@ -208,6 +208,21 @@ def test_arc_behind_matches_a_numpy_reference(seed, n, yaw):
     assert _arc_behind(pts, path, pose) == pytest.approx(want, rel=1e-9, abs=1e-9)
 
 
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(0, 30),
+       kind=st.sampled_from(["radius", "delaunay"]))
+def test_graph_neighbours_are_the_edges_both_ways(seed, n, kind):
+    """The CSR form (``search_kernels.csr_from_edges``): each cone's neighbours are exactly the
+    cones an edge joins it to, sorted by index."""
+    pts = np.random.default_rng(seed).uniform(0.0, 20.0, size=(n, 2))
+    g = search_graph(pts, PARAMS, kind)
+    assert g.indptr.shape == (n + 1,) and g.indices.shape == (2 * len(g.edges),)
+    for v in range(n):
+        want = sorted({int(b) for a, b in g.edges if a == v} | {int(a) for a, b in g.edges
+                                                                if b == v})
+        assert g.neighbours(v).tolist() == want
+
+
 @settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 2**31 - 1), n=st.integers(2, 14))
 def test_graph_dead_end_equals_the_kernels(seed, n):
