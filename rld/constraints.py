@@ -25,7 +25,6 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from rld import geometry as geo
-from rld import geometry_kernels as gk
 from rld.types import Pose
 
 __all__ = [
@@ -53,10 +52,7 @@ def candidate_edges(points: np.ndarray, max_spacing_m: float) -> np.ndarray:
     """Cone pairs that may be consecutive on one boundary: distance <= ``max_spacing_m``
     (CLC eq. 2, the search graph; RLD eq. 35's D <= d_max on edges). Returns (E, 2) int64 with
     ``i < j``, sorted."""
-    points = np.ascontiguousarray(points, dtype=np.float64)
-    if points.shape[0] < 2:
-        return np.zeros((0, 2), dtype=np.int64)
-    return gk.pairs_within(points, float(max_spacing_m))
+    return geo.pairs_within(points, max_spacing_m)
 
 
 def edge_lengths(points: np.ndarray, edges: np.ndarray) -> np.ndarray:

@@ -8,6 +8,8 @@ two boundaries and the lane polygon) that are not on any hot path.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import shapely
 from shapely.geometry import LinearRing, Polygon
@@ -22,6 +24,7 @@ __all__ = [
     "segments_intersect",
     "segments_cross",
     "polylines_touch",
+    "pairs_within",
     "turn_angles",
     "polyline_turn_angles",
     "polyline_length",
@@ -90,6 +93,19 @@ def polylines_touch(p: np.ndarray, q: np.ndarray) -> bool:
     of fewer than two points has no segment and touches nothing."""
     return bool(gk.polylines_touch(np.ascontiguousarray(p, dtype=np.float64).reshape(-1, 2),
                                    np.ascontiguousarray(q, dtype=np.float64).reshape(-1, 2)))
+
+
+def pairs_within(points: np.ndarray, r: float) -> np.ndarray:
+    """Every pair (i, j), i < j, of ``points`` (n, 2) at most ``r`` metres apart, as an (E, 2)
+    int64 array sorted by i, then j (a compiled grid search, ``geometry_kernels.pairs_within``).
+    ``ValueError`` for a radius that is not a positive finite number or a point that is not
+    finite."""
+    points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
+    if not (isinstance(r, int | float | np.integer | np.floating) and math.isfinite(r) and r > 0):
+        raise ValueError(f"the radius must be a positive number of metres, got {r!r}")
+    if not np.all(np.isfinite(points)):
+        raise ValueError("every point must be finite")
+    return gk.pairs_within(points, float(r))
 
 
 def segments_cross(a0, a1, b0, b1) -> np.ndarray:

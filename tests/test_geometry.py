@@ -957,3 +957,20 @@ def test_lane_polygon_degenerate():
     # A lane with no width is an empty polygon after repair.
     line = _straight(0.0)
     assert geo.lane_polygon(line, line).area == pytest.approx(0.0)
+
+
+# --- pairs within a radius --------------------------------------------------------------------
+
+
+def test_pairs_within_hand_worked_and_bad_input():
+    pts = np.array([[0, 0], [3, 4], [10, 0], [6, 8], [3, 4.0000001]], float)
+    # 0-1 and 1-3 and 3-4 are exactly 5 apart (inclusive); 1-4 are 1e-7 apart; 0-4 just past 5.
+    assert geo.pairs_within(pts, 5.0).tolist() == [[0, 1], [1, 3], [1, 4], [3, 4]]
+    assert geo.pairs_within(pts, np.float32(5.0)).shape == (4, 2)
+    assert geo.pairs_within(pts[:1], 5.0).shape == (0, 2)
+    assert geo.pairs_within(np.zeros((0, 2)), 5.0).shape == (0, 2)
+    for bad in (0.0, -1.0, math.nan, math.inf, "5"):
+        with pytest.raises(ValueError, match="radius"):
+            geo.pairs_within(pts, bad)
+    with pytest.raises(ValueError, match="finite"):
+        geo.pairs_within(np.array([[0.0, 0.0], [math.nan, 1.0]]), 5.0)
