@@ -388,7 +388,8 @@ def _insertion_sort(a, k):
 def pairs_within(pts, r):
     """Every pair (i, j), i < j, of the points ``pts`` (n, 2) at most ``r`` apart
     (``math.hypot``), as an (E, 2) int64 array sorted by i, then j. A grid of cells ``r``
-    wide: each point is compared with the points of its own cell and the eight around it.
+    wide (a hair wider): each point is compared with the points of its own cell and the eight
+    around it.
     The grid is a dense array when it has at most 16 n + 4096 cells (any map of a track);
     otherwise cells are numbered by the rank of their column and row among the occupied
     ones, so any spread of finite coordinates works. ``r`` > 0 and finite (the callers
@@ -396,11 +397,14 @@ def pairs_within(pts, r):
     n = pts.shape[0]
     if n < 2:
         return np.empty((0, 2), dtype=np.int64)
+    # Cells a hair wider than r: two points within r of each other are then in the same or
+    # adjacent cells even where x / r rounds across a cell's edge.
+    cell = r * (1.0 + 1e-9)
     fx = np.empty(n)
     fy = np.empty(n)
     for i in range(n):
-        fx[i] = math.floor(pts[i, 0] / r)
-        fy[i] = math.floor(pts[i, 1] / r)
+        fx[i] = math.floor(pts[i, 0] / cell)
+        fy[i] = math.floor(pts[i, 1] / cell)
     x0, x1, y0, y1 = fx.min(), fx.max(), fy.min(), fy.max()
     dense = (x1 - x0 + 1.0) * (y1 - y0 + 1.0) <= 16.0 * n + 4096.0
     if dense:

@@ -974,3 +974,15 @@ def test_pairs_within_hand_worked_and_bad_input():
             geo.pairs_within(pts, bad)
     with pytest.raises(ValueError, match="finite"):
         geo.pairs_within(np.array([[0.0, 0.0], [math.nan, 1.0]]), 5.0)
+
+
+def test_pairs_within_finds_pairs_across_cell_edges():
+    # Points on and either side of the grid's cell edges (multiples of r), in pairs exactly r
+    # apart or a rounding error less: none may be lost to a cell boundary.
+    r = 0.1  # not exact in binary: x / r rounds
+    xs = np.array([k * r for k in range(-5, 6)] + [np.nextafter(k * r, -1.0) for k in range(-5, 6)])
+    pts = np.column_stack([xs, np.zeros_like(xs)])
+    got = {tuple(p) for p in geo.pairs_within(pts, r).tolist()}
+    want = {(i, j) for i in range(len(xs)) for j in range(i + 1, len(xs))
+            if math.hypot(*(pts[j] - pts[i])) <= r}
+    assert got == want
