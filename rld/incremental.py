@@ -64,6 +64,7 @@ from scipy.spatial import cKDTree
 from rld import geometry as geo
 from rld.constraints import (
     blocked_by_fixed,
+    candidate_edges,
     crossing_edge_pairs,
     lane_is_feasible,
     width_conflicts,
@@ -319,7 +320,7 @@ class IncrementalRld:
             ahead |= (points[cand] - points[anchor]) @ direction >= -p.window_behind_m
         cand = np.union1d(cand[ahead], junction)
         xy = points[cand]
-        pairs = cKDTree(xy).query_pairs(p.max_cone_spacing_m, output_type="ndarray")
+        pairs = candidate_edges(xy, p.max_cone_spacing_m)  # the edges the program may use
         if pairs.size == 0:
             return junction
         w = np.hypot(*(xy[pairs[:, 0]] - xy[pairs[:, 1]]).T)
