@@ -43,6 +43,9 @@ import numpy as np
 from numba import njit
 
 from rld.geometry_kernels import (
+    grow_2d,
+    grow_int,
+    grow_rows,
     orient,
     point_segment_distance,
     point_segment_param,
@@ -690,33 +693,6 @@ def _features(wvL, wsL, nL, wvR, wsR, nR, Lcum, Lcum2, Ltc, Ltc2, Rcum, Rcum2, R
 
 
 @njit(cache=True)
-def _grow_int(a, need):
-    if need <= a.shape[0]:
-        return a
-    b = np.empty(max(need, 2 * a.shape[0]), dtype=a.dtype)
-    b[: a.shape[0]] = a
-    return b
-
-
-@njit(cache=True)
-def _grow_rows(a, need):
-    if need <= a.shape[0]:
-        return a
-    b = np.empty((max(need, 2 * a.shape[0]), a.shape[1]), dtype=a.dtype)
-    b[: a.shape[0]] = a
-    return b
-
-
-@njit(cache=True)
-def _grow_2d(a, rows, cols):
-    """``a`` copied into the top-left corner of a new (rows, cols) array (rows, cols at least
-    ``a``'s; the rest uninitialised)."""
-    b = np.empty((rows, cols), dtype=a.dtype)
-    b[: a.shape[0], : a.shape[1]] = a
-    return b
-
-
-@njit(cache=True)
 def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, wmin, wmax,
                     dist_weight, lookahead, max_iterations, guide_l, guide_r, banned,
                     forbid_l=-1, forbid_r=-1, dead_end=-1.0):
@@ -766,7 +742,7 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     triedR = np.zeros((D, maxdeg), dtype=np.bool_)
     made_by = np.full(D, -1, dtype=np.int64)
     # Width values per frame (row) and path position (column). They start small and grow
-    # (``_grow_2d``) as the search goes deeper or the paths longer: a full (N + 1, N) block
+    # (``grow_2d``) as the search goes deeper or the paths longer: a full (N + 1, N) block
     # per side was megabytes on a map of 400 cones, freshly paged in by every call (on one
     # such map the 250 iterations took 1.8 ms that way, 1.0 ms with the pages reused).
     cap = min(D, 64)
@@ -870,10 +846,10 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
         if g >= wvL.shape[0] or need_c > wvL.shape[1]:
             rows = min(D, 2 * wvL.shape[0]) if g >= wvL.shape[0] else wvL.shape[0]
             cols = min(N, 2 * wvL.shape[1]) if need_c > wvL.shape[1] else wvL.shape[1]
-            wvL = _grow_2d(wvL, rows, cols)
-            wsL = _grow_2d(wsL, rows, cols)
-            wvR = _grow_2d(wvR, rows, cols)
-            wsR = _grow_2d(wsR, rows, cols)
+            wvL = grow_2d(wvL, rows, cols)
+            wsL = grow_2d(wsL, rows, cols)
+            wvR = grow_2d(wvR, rows, cols)
+            wsR = grow_2d(wsR, rows, cols)
         if side == 0:
             triedL[f, kl] = True
             triedL[g, :] = False
@@ -935,15 +911,15 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
         if feasible:
             need = lp[K] + nL
             if need > lf.shape[0]:
-                lf = _grow_int(lf, need)
+                lf = grow_int(lf, need)
             need = rp[K] + nR
             if need > rf.shape[0]:
-                rf = _grow_int(rf, need)
+                rf = grow_int(rf, need)
             if K + 2 > lp.shape[0]:
-                lp = _grow_int(lp, K + 2)
-                rp = _grow_int(rp, K + 2)
+                lp = grow_int(lp, K + 2)
+                rp = grow_int(rp, K + 2)
             if K + 1 > feats.shape[0]:
-                feats = _grow_rows(feats, K + 1)
+                feats = grow_rows(feats, K + 1)
             lf[lp[K]: lp[K] + nL] = L[:nL]
             rf[rp[K]: rp[K] + nR] = R[:nR]
             lp[K + 1] = lp[K] + nL

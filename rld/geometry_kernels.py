@@ -342,7 +342,7 @@ def polyline_self_intersects(ring):
             adjacent = j == i + 1 or (i == 0 and j == k - 1)
             if (not adjacent and (min(cx, dx) > x1 + EPS or max(cx, dx) < x0 - EPS
                                   or min(cy, dy) > y1 + EPS or max(cy, dy) < y0 - EPS)):
-                continue  # bounding boxes apart: no shared point
+                continue  # segments_intersect's box test, this segment's box hoisted
             if adjacent:
                 # Adjacent edges share one vertex and may touch only there (no fold-back).
                 _, end = segment_distance_end(ax, ay, bx, by, cx, cy, dx, dy)
@@ -363,13 +363,51 @@ def polylines_touch(p, q):
         x0, x1, y0, y1 = min(ax, bx), max(ax, bx), min(ay, by), max(ay, by)
         for j in range(q.shape[0] - 1):
             cx, cy, dx, dy = q[j, 0], q[j, 1], q[j + 1, 0], q[j + 1, 1]
-            # Bounding boxes apart (beyond _on_segment's EPS): no shared point.
+            # segments_intersect's own box test, with this segment's box computed once per
+            # row (measured: 35 against 60 us on two rings of 100 cones).
             if (min(cx, dx) > x1 + EPS or max(cx, dx) < x0 - EPS or min(cy, dy) > y1 + EPS
                     or max(cy, dy) < y0 - EPS):
                 continue
             if segments_intersect(ax, ay, bx, by, cx, cy, dx, dy):
                 return True
     return False
+
+
+# ----------------------------------------------------------------------------------------------
+# Growable arrays, for kernels that do not know their output's size in advance.
+
+
+@njit(cache=True)
+def grow_int(a, need):
+    """``a`` (1-d) if it holds ``need`` entries, else a copy at least twice as long."""
+    if need <= a.shape[0]:
+        return a
+    b = np.empty(max(need, 2 * a.shape[0]), dtype=a.dtype)
+    b[: a.shape[0]] = a
+    return b
+
+
+@njit(cache=True)
+def grow_rows(a, need):
+    """``a`` (2-d) if it has ``need`` rows, else a copy with at least twice as many."""
+    if need <= a.shape[0]:
+        return a
+    b = np.empty((max(need, 2 * a.shape[0]), a.shape[1]), dtype=a.dtype)
+    b[: a.shape[0]] = a
+    return b
+
+
+@njit(cache=True)
+def grow_2d(a, rows, cols):
+    """``a`` copied into the top-left corner of a new (rows, cols) array (rows, cols at least
+    ``a``'s; the rest uninitialised)."""
+    b = np.empty((rows, cols), dtype=a.dtype)
+    b[: a.shape[0], : a.shape[1]] = a
+    return b
+
+
+# ----------------------------------------------------------------------------------------------
+# Pairs of points within a radius (the candidate edges of both methods).
 
 
 @njit(cache=True)
@@ -382,6 +420,27 @@ def _insertion_sort(a, k):
             a[j + 1] = a[j]
             j -= 1
         a[j + 1] = v
+
+
+@njit(cache=True)
+def _axis_neighbours(dense, idx, f, size, u):
+    """For every point, the grid columns (or rows) one step below, level and one step above its
+    own, (n, 3), -1 where there is none: in a dense grid the indices ``idx - 1 .. idx + 1``
+    inside ``size``; otherwise the ranks of the floor values ``f - 1 .. f + 1`` among the
+    occupied ones ``u`` (-1 when unoccupied)."""
+    n = idx.shape[0]
+    out = np.full((n, 3), -1, dtype=np.int64)
+    for i in range(n):
+        for d in range(3):
+            if dense:
+                t = idx[i] + d - 1
+                if 0 <= t < size:
+                    out[i, d] = t
+            else:
+                t = np.searchsorted(u, f[i] + d - 1)
+                if t < size and u[t] == f[i] + d - 1:
+                    out[i, d] = t
+    return out
 
 
 @njit(cache=True)
@@ -410,21 +469,24 @@ def pairs_within(pts, r):
     if dense:
         # Column and row from 0; a cell's key is col * w + row.
         w = int(y1 - y0) + 1
-        ncell = (int(x1 - x0) + 1) * w
+        ncol = int(x1 - x0) + 1
         col = np.empty(n, dtype=np.int64)
         row = np.empty(n, dtype=np.int64)
         for i in range(n):
             col[i] = int(fx[i] - x0)
             row[i] = int(fy[i] - y0)
-        ncol = ncell // w
+        ux = fx  # unused by a dense grid
+        uy = fy
     else:
         ux = np.unique(fx)
         uy = np.unique(fy)
         w = uy.size
         ncol = ux.size
-        ncell = ncol * w
         col = np.searchsorted(ux, fx)
         row = np.searchsorted(uy, fy)
+    ncell = ncol * w
+    nx = _axis_neighbours(dense, col, fx, ncol, ux)
+    ny = _axis_neighbours(dense, row, fy, w, uy)
     # Counting sort of the points by cell: cell c holds order[start[c]:start[c + 1]].
     start = np.zeros(ncell + 1, dtype=np.int64)
     for i in range(n):
@@ -437,31 +499,19 @@ def pairs_within(pts, r):
         c = col[i] * w + row[i]
         order[fill[c]] = i
         fill[c] += 1
-    cap = 8 * n
-    a = np.empty(cap, dtype=np.int64)
-    b = np.empty(cap, dtype=np.int64)
+    out = np.empty((8 * n, 2), dtype=np.int64)
     m = 0
     nbr = np.empty(n, dtype=np.int64)
     for i in range(n):
         k = 0
-        for dx in range(-1, 2):
-            if dense:
-                tx = col[i] + dx
-                if tx < 0 or tx >= ncol:
+        for a in range(3):
+            tx = nx[i, a]
+            if tx < 0:
+                continue
+            for b in range(3):
+                ty = ny[i, b]
+                if ty < 0:
                     continue
-            else:
-                tx = np.searchsorted(ux, fx[i] + dx)
-                if tx == ncol or ux[tx] != fx[i] + dx:
-                    continue
-            for dy in range(-1, 2):
-                if dense:
-                    ty = row[i] + dy
-                    if ty < 0 or ty >= w:
-                        continue
-                else:
-                    ty = np.searchsorted(uy, fy[i] + dy)
-                    if ty == w or uy[ty] != fy[i] + dy:
-                        continue
                 c = tx * w + ty
                 for s in range(start[c], start[c + 1]):
                     j = order[s]
@@ -470,19 +520,9 @@ def pairs_within(pts, r):
                         nbr[k] = j
                         k += 1
         _insertion_sort(nbr, k)
-        if m + k > cap:
-            cap = max(2 * cap, m + k)
-            a2 = np.empty(cap, dtype=np.int64)
-            b2 = np.empty(cap, dtype=np.int64)
-            a2[:m] = a[:m]
-            b2[:m] = b[:m]
-            a = a2
-            b = b2
+        out = grow_rows(out, m + k)
         for t in range(k):
-            a[m] = i
-            b[m] = nbr[t]
+            out[m, 0] = i
+            out[m, 1] = nbr[t]
             m += 1
-    out = np.empty((m, 2), dtype=np.int64)
-    out[:, 0] = a[:m]
-    out[:, 1] = b[:m]
-    return out
+    return out[:m].copy()
