@@ -24,7 +24,6 @@ interface and ``lane.stats["over_time_limit"]`` says when a call exceeded it.
 
 from __future__ import annotations
 
-import functools
 import logging
 import time
 
@@ -93,18 +92,19 @@ def _map_beyond(points: np.ndarray, pose: Pose, length_m: float) -> bool:
 
 
 def _short(points: np.ndarray, pose: Pose, left: np.ndarray, right: np.ndarray,
-           length_m: float, map_beyond=None) -> bool:
+           length_m: float, memo: list[bool] | None = None) -> bool:
     """Whether a boundary of the lane reaches less than ``length_m`` metres of path ahead of
     the car (its path length less the part behind the car, ``clc.search.path_ahead``) while
     the map holds a cone ahead of the car farther than ``length_m`` from it (``_map_beyond``):
-    the lane stops short of what the map shows. ``map_beyond``, when given, is a callable
-    returning that second answer (the dive rounds ask it once per call, only for a short
-    lane)."""
+    the lane stops short of what the map shows. ``memo``, when given, keeps that second
+    answer between calls (the dive rounds ask it at most once per solve, for a short lane)."""
     if min(path_ahead(points, left, pose), path_ahead(points, right, pose)) >= length_m:
         return False
-    if map_beyond is None:
+    if memo is None:
         return _map_beyond(points, pose, length_m)
-    return bool(map_beyond())
+    if not memo:
+        memo.append(_map_beyond(points, pose, length_m))
+    return memo[0]
 
 
 def _match(prev_xy: np.ndarray, tree: cKDTree) -> np.ndarray:
@@ -202,9 +202,9 @@ class ClcModel:
         done: set[tuple] = set()
         n_dives = iterations = rounds = short_rounds = 0
         cost = None  # the winner's, computed once a dive has a lane to compare
-        # Whether the map reaches beyond SHORT_LANE_M: found once per call, when first asked
-        # (it does not depend on the winner; 9 us on a 409-cone map).
-        beyond = functools.cache(lambda: _map_beyond(points, pose, SHORT_LANE_M))
+        # Whether the map reaches beyond SHORT_LANE_M (_short): found at most once per call,
+        # when a winner is short (it does not depend on the winner; 9 us on a 409-cone map).
+        beyond: list[bool] = []
         while rounds < DIVE_ROUNDS:
             rounds += 1
             left, right = winner[0], winner[1]

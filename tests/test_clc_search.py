@@ -841,6 +841,12 @@ def test_short_lane_needs_a_map_beyond_it():
     assert not _short(behind, POSE, L, R, 20.0)  # the far cone is behind the car
     assert not _short(far, POSE, L, R, 12.0)  # 12 m reached
     assert _short(far, POSE, L, R[:2], 12.0)  # one side 3 m
+    # The map's answer, once kept in a memo, is reused: not asked for a long lane, and a
+    # kept answer stands even for another map (the dive rounds keep one per solve).
+    memo: list[bool] = []
+    assert not _short(far, POSE, L, R, 12.0, memo) and memo == []
+    assert not _short(near, POSE, L, R, 20.0, memo) and memo == [False]
+    assert not _short(far, POSE, L, R, 20.0, memo)
 
 
 def _ring_lane():
