@@ -163,6 +163,7 @@ def enumerate_candidates(
     close_loops: bool = False,
     banned: np.ndarray | None = None,
     forbid: tuple[int, int] = (-1, -1),
+    stale: int = 0,
 ) -> SearchResult:
     """CLC Alg. 1 up to the ranking: graph, start vertices, Alg. 2, closings.
 
@@ -172,7 +173,9 @@ def enumerate_candidates(
     ``close_loops``: add the closing of every closable candidate (IV-E) as a further candidate;
     ``clc.solver`` closes only the ranked winner instead (see there). ``banned``: cones no path
     may take (indices into ``points``); ``forbid``: a cone per side (-1: none) that may not
-    come right after that side's whole guide, only later (``contested_dives``).
+    come right after that side's whole guide, only later (``contested_dives``). ``stale``
+    (0: off; only under a limit): abandon the subtree of an extension after which this many
+    extensions in a row left the pair infeasible (``clc.solver``'s trapped searches).
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
     g = graph if isinstance(graph, SearchGraph) else search_graph(points, params, graph)
@@ -189,7 +192,7 @@ def enumerate_candidates(
         float(params.nvd_lookahead_weight), int(it_max), np.ascontiguousarray(gl, dtype=np.int64),
         np.ascontiguousarray(gr, dtype=np.int64),
         np.zeros(0, np.int64) if banned is None else np.ascontiguousarray(banned, dtype=np.int64),
-        int(forbid[0]), int(forbid[1]), g.dead_end(params))
+        int(forbid[0]), int(forbid[1]), g.dead_end(params), int(stale))
     cands = CandidateList(lf, lp, rf, rp)
     features = feats
     if close_loops:

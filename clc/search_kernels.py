@@ -695,7 +695,7 @@ def _features(wvL, wsL, nL, wvR, wsR, nR, Lcum, Lcum2, Ltc, Ltc2, Rcum, Rcum2, R
 @njit(cache=True)
 def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, wmin, wmax,
                     dist_weight, lookahead, max_iterations, guide_l, guide_r, banned,
-                    forbid_l=-1, forbid_r=-1, dead_end=-1.0):
+                    forbid_l=-1, forbid_r=-1, dead_end=-1.0, stale=0):
     """CLC Alg. 2: enumerate the path pairs from (start_l, start_r) that satisfy CD (eq. 6).
 
     ``pts`` (N, 2) float64 metres; ``adj_ptr`` (N+1,), ``adj_idx`` the search graph in CSR form
@@ -741,6 +741,8 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     triedL = np.zeros((D, maxdeg), dtype=np.bool_)
     triedR = np.zeros((D, maxdeg), dtype=np.bool_)
     made_by = np.full(D, -1, dtype=np.int64)
+    # The depth of the deepest feasible frame on the current path (the start frame counts).
+    last_ok = np.zeros(D, dtype=np.int64)
     # Width values per frame (row) and path position (column). They start small and grow
     # (``grow_2d``) as the search goes deeper or the paths longer: a full (N + 1, N) block
     # per side was megabytes on a map of 400 cones, freshly paged in by every call (on one
@@ -787,6 +789,7 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     wvR[0, 0] = d0
     iterations = 0
     complete = True
+    gave_up = False  # a subtree abandoned (``stale``): the enumeration is not complete
     if d0 < wmin or (pts[start_l, 0] == pts[start_r, 0] and pts[start_l, 1] == pts[start_r, 1]):
         # The start pair is already narrower than the lane can be: no extension can help, and
         # a zero-length back edge makes every ring non-simple.
@@ -937,7 +940,15 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
         if not backtrack and longR:
             backtrack = not _has_option(pts, adj_ptr, adj_idx, L, nL, triedL[g], in_path,
                                         max_turn)
-        if backtrack:
+        last_ok[g] = g if feasible else last_ok[f]
+        # Under a limit only (the enumeration stays complete without one): a pair left
+        # infeasible by ``stale`` extensions in a row (a width above w_max that the other
+        # boundary does not mend: it wanders on through the map, an exponential subtree of
+        # infeasible pairs) abandons the subtree of the extension after its last feasible
+        # frame F: that frame's next option comes next.
+        give_up = (not backtrack and stale > 0 and max_iterations > 0
+                   and g - last_ok[g] >= stale)
+        if backtrack or give_up:
             if side == 0:
                 nL -= 1
                 in_path[L[nL]] = False
@@ -946,4 +957,16 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
                 in_path[R[nR]] = False
         else:
             depth = g
-    return lf[: lp[K]], lp[: K + 1], rf[: rp[K]], rp[: K + 1], feats[:K], iterations, complete
+        if give_up:
+            gave_up = True
+            F = last_ok[g]
+            while depth > F:
+                if made_by[depth] == 0:
+                    nL -= 1
+                    in_path[L[nL]] = False
+                else:
+                    nR -= 1
+                    in_path[R[nR]] = False
+                depth -= 1
+    return (lf[: lp[K]], lp[: K + 1], rf[: rp[K]], rp[: K + 1], feats[:K], iterations,
+            complete and not gave_up)

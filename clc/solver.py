@@ -71,6 +71,15 @@ MIN_START_DEPTH = 5
 #: from beside the choice (``contested_dives(..., cut_other=True)``). 0 turns it off. 20 m is
 #: the protocol's critical distance (docs/clc.md, "Short lanes revisited").
 SHORT_LANE_M = 20.0
+#: A main search that stops at it_max with fewer candidates than this was trapped: a width
+#: above w_max that the other boundary never mends while both wander on through the map, an
+#: exponential subtree of infeasible pairs (track 6 at R = 30 m, 30 %: 8 candidates in 20 000
+#: iterations). Its start pair is searched again with the give-up rule
+#: (``enumerate_candidates(stale=STALE_EXTENSIONS)``), after the start pair is chosen, and the
+#: candidates of both searches are ranked (docs/clc.md, "Trapped searches"). 0 turns it off.
+TRAPPED_CANDIDATES = 20
+#: The give-up rule's run of infeasible extensions (``enumerate_candidates(stale=...)``).
+STALE_EXTENSIONS = 8
 #: Drop a closed lane's join cone when the ring is cheaper without it (``drop_ring_join``).
 RING_JOIN = True
 
@@ -175,6 +184,16 @@ class ClcModel:
                                  max_iterations=max(it - half, 1) if it > 0 else 0)
         return merge_results(a, b)
 
+    def _untrap(self, points, pose, res):
+        """``(res, trapped)``: when the search was trapped (TRAPPED_CANDIDATES), ``res`` with
+        the candidates of a second search from the same start pair under the give-up rule."""
+        if (TRAPPED_CANDIDATES > 0 and not res.complete and res.start is not None
+                and len(res.candidates) < TRAPPED_CANDIDATES):
+            again = enumerate_candidates(points, pose, self.params, graph=res.graph,
+                                         start=res.start, stale=STALE_EXTENSIONS)
+            return merge_results(res, again), True
+        return res, False
+
     def _dive_rounds(self, points, pose, res, winner):
         """The contested-choice dives (``clc.search.contested_dives``) around ``winner``
         (left, right, closed, score), in rounds: the ranker's pick of every dive is a finalist
@@ -272,6 +291,11 @@ class ClcModel:
             if d > depth:
                 res, chosen, depth = nxt, rank, d
         stats["start_fallbacks"] = fallbacks
+        stats["trapped"] = False  # the search was trapped and run again (_untrap)
+        if guide is None:
+            before = res.iterations
+            res, stats["trapped"] = self._untrap(points, pose, res)
+            iterations += res.iterations - before
         stats.update(iterations=iterations, complete=res.complete,
                      n_candidates=len(res.candidates), n_cones_used=int(points.shape[0]))
         if colors is not None or confidence is not None:

@@ -987,6 +987,9 @@ def test_short_lane_dives_mend_track6(dataset_dir, monkeypatch):
                     path_ahead(f.cones, lane.right, f.pose))
         return s.critical_tolerant, ahead
 
+    # The trapped search's second run (test_trapped_search_is_searched_again_track6) mends
+    # this pose on its own too; off here, so that the short lanes' dives are what is tested.
+    monkeypatch.setattr(clc.solver, "TRAPPED_CANDIDATES", 0)
     monkeypatch.setattr(clc.solver, "SHORT_LANE_M", 0.0)
     critical, ahead = run()
     assert critical and ahead < 15.0
@@ -1021,3 +1024,57 @@ def test_start_pair_far_behind_comes_later_track2(dataset_dir):
         start = list(lane.stats["start"])
         assert bool((f.source[start] < 0).any()) is critical  # negative: a false positive
         assert bool((f.pose.to_local(f.cones[start])[:, 0] < -behind).any()) is False
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(5, 9), stale=st.integers(1, 4),
+       limit=st.sampled_from([0, 5, 20, 10**6]))
+def test_give_up_rule_is_sound_and_off_without_a_limit(seed, n, stale, limit):
+    """The give-up rule (``stale``) abandons subtrees only under a limit: with none the
+    enumeration is the complete one; under one every candidate is a feasible pair that brute
+    force finds, and a search that abandoned a subtree does not call itself complete (one
+    that does found every pair)."""
+    pts = lane_instance(seed, n)
+    start = find_starting_vertices(pts, POSE, PARAMS.near_radius_m)
+    if start is None:
+        return
+    expected = brute_force(pts, PARAMS, start)
+    res = enumerate_candidates(pts, POSE, PARAMS, max_iterations=limit, stale=stale)
+    got = as_set(res)
+    assert len(got) == len(res.candidates)
+    assert got <= expected
+    if limit == 0:
+        assert res.complete and got == expected
+    if res.complete:
+        assert got == expected
+
+
+def test_trapped_search_is_searched_again_track6(dataset_dir, monkeypatch):
+    """Track 6 at R = 30 m, 30 % false positives (seed 1), pose 108: the right boundary takes a
+    false positive 3 m outside the lane early on, its width to the left boundary stays above
+    w_max, and the left boundary wanders on around the circuit: the 250 iterations find 8
+    feasible pairs (20 000 find no more), none beyond the hairpin 8 m ahead. Searched again
+    with the give-up rule (``stale``), the subtree is abandoned after 8 infeasible extensions
+    and the lane follows the hairpin."""
+    import clc.solver
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    lap = simulate_lap(load_dataset_track(dataset_dir, 6), range_m=30.0, fp_rate=0.3, seed=1)
+    f = lap.frame(108)
+    start = (270, 19)  # the first start pair, the one the solver keeps
+    plain = enumerate_candidates(f.cones, f.pose, PARAMS, start=start)
+    assert not plain.complete and len(plain.candidates) < clc.solver.TRAPPED_CANDIDATES
+    again = enumerate_candidates(f.cones, f.pose, PARAMS, start=start,
+                                 stale=clc.solver.STALE_EXTENSIONS)
+    assert len(again.candidates) > 5 * len(plain.candidates)
+
+    def run():
+        lane = LaneSolver("clc").solve(f.cones, f.pose)
+        s = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
+        return s.critical_tolerant, lane.stats["trapped"]
+
+    monkeypatch.setattr(clc.solver, "TRAPPED_CANDIDATES", 0)
+    assert run() == (True, False)
+    monkeypatch.setattr(clc.solver, "TRAPPED_CANDIDATES", 20)
+    assert run() == (False, True)
