@@ -790,6 +790,7 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     iterations = 0
     complete = True
     gave_up = False  # a subtree abandoned (``stale``): the enumeration is not complete
+    unwind = D  # frames deeper than this are abandoned (D: none)
     if d0 < wmin or (pts[start_l, 0] == pts[start_r, 0] and pts[start_l, 1] == pts[start_r, 1]):
         # The start pair is already narrower than the lane can be: no extension can help, and
         # a zero-length back edge makes every ring non-simple.
@@ -800,14 +801,18 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
             complete = False
             break
         f = depth
-        kl, vl = _choose_option(pts, adj_ptr, adj_idx, L, nL, triedL[f], in_path, max_turn,
-                                hx, hy, dist_weight, lookahead, dead_end, guide_l,
-                                on_gl[nL - 1], forbid_l)
-        kr, vr = _choose_option(pts, adj_ptr, adj_idx, R, nR, triedR[f], in_path, max_turn,
-                                hx, hy, dist_weight, lookahead, dead_end, guide_r,
-                                on_gr[nR - 1], forbid_r)
+        if depth > unwind:  # a frame the give-up rule abandoned (below)
+            kl, vl, kr, vr = -1, -1, -1, -1
+        else:
+            unwind = D
+            kl, vl = _choose_option(pts, adj_ptr, adj_idx, L, nL, triedL[f], in_path,
+                                    max_turn, hx, hy, dist_weight, lookahead, dead_end,
+                                    guide_l, on_gl[nL - 1], forbid_l)
+            kr, vr = _choose_option(pts, adj_ptr, adj_idx, R, nR, triedR[f], in_path,
+                                    max_turn, hx, hy, dist_weight, lookahead, dead_end,
+                                    guide_r, on_gr[nR - 1], forbid_r)
         if kl < 0 and kr < 0:
-            # Frame exhausted: undo the extension that made it.
+            # Frame exhausted (or abandoned): undo the extension that made it.
             if depth == 0:
                 break
             s = made_by[depth]
@@ -959,14 +964,6 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
             depth = g
         if give_up:
             gave_up = True
-            F = last_ok[g]
-            while depth > F:
-                if made_by[depth] == 0:
-                    nL -= 1
-                    in_path[L[nL]] = False
-                else:
-                    nR -= 1
-                    in_path[R[nR]] = False
-                depth -= 1
+            unwind = last_ok[g]  # the frames above it are undone as exhausted ones
     return (lf[: lp[K]], lp[: K + 1], rf[: rp[K]], rp[: K + 1], feats[:K], iterations,
             complete and not gave_up)
