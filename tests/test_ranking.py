@@ -4,6 +4,7 @@ the training pairs (eq. 14)."""
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 import pytest
@@ -95,6 +96,28 @@ def test_learned_ranker_round_trip(tmp_path):
     by_hand = np.array([sum(w["w2"][h] * max(0.0, z[k] @ w["W1"][:, h] + w["b1"][h])
                             for h in range(5)) + 0.3 for k in range(len(CANDS))])
     np.testing.assert_allclose(r.score(PTS, None, None, CANDS, x), by_hand)
+
+
+def test_learned_ranker_load_is_read_once_until_the_file_changes(tmp_path):
+    w = _weights()
+    path = save_ranker(w, tmp_path / "r.npz", {"note": "test"})
+    r = LearnedRanker.load(path)
+    assert LearnedRanker.load(path) is r  # a stateless solve_lane reads it once
+    assert not r.W1.flags.writeable  # shared between solvers, so read-only
+    x = _features()
+    before = r.net(x)
+    w2 = _weights(seed=1)
+    save_ranker(w2, path, {"note": "retrained"})
+    os.utime(path, ns=(0, path.stat().st_mtime_ns + 10**9))  # whatever the clock's resolution
+    r2 = LearnedRanker.load(path)
+    assert r2 is not r
+    assert not np.allclose(r2.net(x), before)
+    np.testing.assert_array_equal(r.net(x), before)  # the first instance is untouched
+    # Building one from the caller's arrays copies them: the caller's stay writeable.
+    arrays = {k: np.array(v) for k, v in _weights().items()}
+    LearnedRanker(arrays["W1"], arrays["b1"], arrays["w2"], arrays["b2"], arrays["mean"],
+                  arrays["std"])
+    arrays["W1"][0, 0] = 1.0
 
 
 def test_learned_ranker_rejects_bad_files(tmp_path):
