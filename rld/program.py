@@ -24,6 +24,7 @@ a solution actually contains.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -33,7 +34,8 @@ from rld import constraints as cons
 from rld import costs
 from rld.types import LaneParams, Pose
 
-__all__ = ["LaneProgram", "build_program", "cycle_cut", "extract_paths", "ROW_FAMILIES"]
+__all__ = ["LaneProgram", "build_program", "cycle_cut", "lane_cut", "extract_paths",
+           "ROW_FAMILIES"]
 
 ROW_FAMILIES = (
     "inlier_lower",  # eq. 1: g_i - A_i <= 0
@@ -48,6 +50,7 @@ ROW_FAMILIES = (
     "turn_limit",  # eq. 28 on pruned f: a_ij + a_jk <= 1
     "angle_link",  # eqs 22-23: 2 f - a_ij - a_jk <= 0 and f - a_ij - a_jk >= -1
     "cycle_cut",  # eq. 5, lazily
+    "lane_cut",  # our addition, lazily: a lane the shared predicate rejects is cut off
     "fixed_start",  # optional: the near endpoints are given (cross-check with CLC)
     "angle_cover",  # valid equalities tying f to g, m and a (our strengthening)
     # The sided formulation (our extension):
@@ -488,6 +491,30 @@ def cycle_cut(program: LaneProgram, cones: list[int]) -> None:
         shape=(1, program.n_cols),
     )
     program.add_rows(A, np.array([-np.inf]), np.array([len(cones) - 1.0]), "cycle_cut")
+
+
+def lane_cut(program: LaneProgram, left: Sequence[int], right: Sequence[int]) -> None:
+    """Cut off one lane: at most |E| - 1 of its edges E (the boundaries ``left`` and
+    ``right``, cone indices of the program, each in path order; in the sided formulation each
+    side's edges in that side's block). Our addition: ``rld.solver.RldModel.solve`` adds it,
+    lazily like the cycle cuts, for an optimum that the shared lane predicate rejects."""
+    cols = []
+    for side, path in enumerate((left, right)):
+        path = np.asarray(path, dtype=np.int64)
+        if path.size < 2:
+            continue
+        k = np.asarray(program.edge_ids(path[:-1], path[1:]), dtype=np.int64)
+        if np.any(k < 0):
+            raise ValueError("lane_cut: an edge of the lane is not a candidate edge")
+        cols.append(program.block("a", side if program.sided else 0).start + k)
+    cols = np.concatenate(cols) if cols else np.zeros(0, dtype=np.int64)
+    if cols.size == 0:
+        raise ValueError("lane_cut: the lane has no edge")
+    A = sp.csr_matrix(
+        (np.ones(cols.size), (np.zeros(cols.size, dtype=np.int64), cols)),
+        shape=(1, program.n_cols),
+    )
+    program.add_rows(A, np.array([-np.inf]), np.array([cols.size - 1.0]), "lane_cut")
 
 
 def extract_paths(

@@ -3,7 +3,11 @@
 ``RldModel.solve(points, pose)`` takes the ``max_cones`` map cones nearest ahead of the car,
 builds the program of ``rld.program`` over them, solves it with the chosen backend under the time
 budget, adds cycle-elimination cuts (RLD eq. 5) for any cycle in the solution and re-solves until
-the chosen edges are exactly two simple paths, and returns a ``Lane`` in the caller's indices.
+the chosen edges are exactly two simple paths. When those paths fail the shared lane predicate
+(``rld.constraints.lane_is_feasible``: C_seg, C_width, C_poly, which CLC enumerates under), that
+edge set is cut off (``rld.program.lane_cut``) and the program solved again, up to
+``MAX_LANE_CUT_ROUNDS`` times within the budget; a lane still rejected is returned as no lane.
+Returns a ``Lane`` in the caller's indices.
 
 Warm start: the previous lane's boundaries are kept as positions; on the next call every
 previous cone is matched to the nearest new window cone within 0.5 m (SLAM maps keep their cones)
@@ -21,8 +25,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from rld.backends import make_backend
-from rld.constraints import blocked_by_fixed, near_car_mask
-from rld.program import build_program, cycle_cut, extract_paths
+from rld.constraints import blocked_by_fixed, lane_is_feasible, near_car_mask
+from rld.program import build_program, cycle_cut, extract_paths, lane_cut
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
 __all__ = ["RldModel", "cone_window", "MATCH_TOLERANCE_M", "DEFAULT_TIME_LIMIT_S"]
@@ -30,6 +34,8 @@ __all__ = ["RldModel", "cone_window", "MATCH_TOLERANCE_M", "DEFAULT_TIME_LIMIT_S
 MATCH_TOLERANCE_M = 0.5
 DEFAULT_TIME_LIMIT_S = 0.4  # the paper's success limit (section IV-A)
 MAX_CYCLE_ROUNDS = 25
+#: Re-solves after the program's optimum failed the shared lane predicate (``lane_cut``).
+MAX_LANE_CUT_ROUNDS = 3
 
 
 def _split(program, x) -> tuple[list[list[int]], list[list[int]]]:
@@ -99,6 +105,15 @@ class RldModel:
             return program.solution_from_edges(per_side[0], per_side[1]), n
         return program.solution_from_edges(np.array(per_side[0] + per_side[1])), n
 
+    @staticmethod
+    def _orient(program, paths, sub, pose) -> tuple[list[int], list[int]]:
+        """(left, right) of a solution's two paths, each from its end nearer the car."""
+        if program.sided:
+            return paths[0], paths[1]
+        # Left is the path whose first cone lies further to the car's left.
+        y0 = [pose.to_local(sub[[p[0]]])[0, 1] for p in paths]
+        return (paths[0], paths[1]) if y0[0] >= y0[1] else (paths[1], paths[0])
+
     def solve(
         self,
         points: np.ndarray,
@@ -132,6 +147,7 @@ class RldModel:
                 "the car",
                 stats={"backend": self.backend.name},
             )
+        window_given = window is not None
         if window is None:
             window, horizon = cone_window(points, pose, self.params)
         else:
@@ -185,21 +201,41 @@ class RldModel:
         stats["warm_start_edges"] = n_hinted
         result = None
         t_solve = time.perf_counter()  # the budget bounds the solves, not the model update
+        stats["lane_cut_rounds"] = 0
+        # Lanes the program allows but the shared predicate (C_seg, C_width, C_poly:
+        # rld.constraints.lane_is_feasible, CLC's) rejects are cut off and the program solved
+        # again (lane_cut; docs/formulation.md). Only for the car's own lane: the incremental
+        # solver's frontier (window, fixed edges) is not a lane from the car.
+        check = window_given is False and not fixed_edges and fixed_lane is None
+        infeasible = False
         while True:
-            remaining = budget - (time.perf_counter() - t_solve)
-            if remaining <= 0 and result is not None:
-                break
-            result = self.backend.solve(program, max(remaining, 1e-3), hint)
-            if result.x is None:
+            while True:
+                remaining = budget - (time.perf_counter() - t_solve)
+                if remaining <= 0 and result is not None:
+                    break
+                result = self.backend.solve(program, max(remaining, 1e-3), hint)
+                if result.x is None:
+                    break
+                paths, cycles = _split(program, result.x)
+                if not cycles:
+                    break
+                stats["cycle_rounds"] += 1
+                if stats["cycle_rounds"] > MAX_CYCLE_ROUNDS:
+                    break
+                for comp in cycles:
+                    cycle_cut(program, comp)
+            if not check or result.x is None:
                 break
             paths, cycles = _split(program, result.x)
-            if not cycles:
+            if cycles or len(paths) != 2:
                 break
-            stats["cycle_rounds"] += 1
-            if stats["cycle_rounds"] > MAX_CYCLE_ROUNDS:
+            pl, pr = self._orient(program, paths, sub, pose)
+            infeasible = not lane_is_feasible(sub[pl], sub[pr], self.params)
+            if (not infeasible or stats["lane_cut_rounds"] >= MAX_LANE_CUT_ROUNDS
+                    or budget - (time.perf_counter() - t_solve) <= 0):
                 break
-            for comp in cycles:
-                cycle_cut(program, comp)
+            stats["lane_cut_rounds"] += 1
+            lane_cut(program, pl, pr)
         stats["solve_time_s"] = time.perf_counter() - t_solve
         if getattr(self.backend, "last_name", ""):
             stats["backend"] = f"{self.backend.name}:{self.backend.last_name}"
@@ -226,12 +262,14 @@ class RldModel:
         if len(paths) != 2:
             return Lane.not_found(points, f"solution has {len(paths)} paths", stats=stats)
         stats["formulation"] = "sided" if program.sided else "paper"
-        if program.sided:
-            left, right = paths
-        else:
-            # Left is the path whose first cone lies further to the car's left.
-            y0 = [pose.to_local(sub[[p[0]]])[0, 1] for p in paths]
-            left, right = (paths[0], paths[1]) if y0[0] >= y0[1] else (paths[1], paths[0])
+        left, right = self._orient(program, paths, sub, pose)
+        if infeasible:
+            n = stats["lane_cut_rounds"]
+            why = ("the round limit" if n >= MAX_LANE_CUT_ROUNDS else "the time budget")
+            return Lane.not_found(
+                points, f"the program's best lane fails the lane constraints (C_seg, C_width, "
+                f"C_poly: rld.constraints.lane_is_feasible); {n} lane cuts before {why} ran "
+                "out", stats=stats)
         self._previous = [sub[left], sub[right]]
         used = [program.edge_ids(p[:-1], p[1:]) for p in (np.asarray(left), np.asarray(right))]
         if program.sided:
