@@ -296,9 +296,13 @@ def c_width(
     return bool(np.all((w >= min_width_m) & (w <= max_width_m)))
 
 
-def lane_is_feasible(left: np.ndarray, right: np.ndarray, params, closed: bool = False) -> bool:
+def lane_is_feasible(left: np.ndarray, right: np.ndarray, params, closed: bool = False,
+                     max_width: bool = True) -> bool:
     """CLC CD(P) (eq. 6) on a whole path pair: C_seg, C_width and C_poly, plus the spacing limit
-    the search graph enforces (CLC constraint 1, ``max_cone_spacing_m``)."""
+    the search graph enforces (CLC constraint 1, ``max_cone_spacing_m``). ``max_width=False``
+    leaves out C_width's upper bound: RLD's cone window can cut one boundary short of the other,
+    and the matching lines past the shorter one's end (diagonals to its last cone) then exceed
+    w_max on the true lane (``rld.solver``)."""
     for xy in (left, right):
         if len(xy) >= 2:
             seg = np.diff(_closed(np.asarray(xy, float), closed), axis=0)
@@ -306,7 +310,8 @@ def lane_is_feasible(left: np.ndarray, right: np.ndarray, params, closed: bool =
                 return False
     return (
         c_seg(left, right, params.max_turn_angle_rad, closed)
-        and c_width(left, right, params.min_width_m, params.max_width_m, closed)
+        and c_width(left, right, params.min_width_m,
+                    params.max_width_m if max_width else math.inf, closed)
         and c_poly(left, right, closed)
     )
 

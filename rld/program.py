@@ -50,7 +50,7 @@ ROW_FAMILIES = (
     "turn_limit",  # eq. 28 on pruned f: a_ij + a_jk <= 1
     "angle_link",  # eqs 22-23: 2 f - a_ij - a_jk <= 0 and f - a_ij - a_jk >= -1
     "cycle_cut",  # eq. 5, lazily
-    "lane_cut",  # our addition, lazily: a lane the shared predicate rejects is cut off
+    "lane_cut",  # our addition, lazily: exactly a lane the shared predicate rejects
     "fixed_start",  # optional: the near endpoints are given (cross-check with CLC)
     "angle_cover",  # valid equalities tying f to g, m and a (our strengthening)
     # The sided formulation (our extension):
@@ -494,11 +494,15 @@ def cycle_cut(program: LaneProgram, cones: list[int]) -> None:
 
 
 def lane_cut(program: LaneProgram, left: Sequence[int], right: Sequence[int]) -> None:
-    """Cut off one lane: at most |E| - 1 of its edges E (the boundaries ``left`` and
-    ``right``, cone indices of the program, each in path order; in the sided formulation each
-    side's edges in that side's block). Our addition: ``rld.solver.RldModel.solve`` adds it,
-    lazily like the cycle cuts, for an optimum that the shared lane predicate rejects."""
-    cols = []
+    """Cut off exactly one lane, the boundaries ``left`` and ``right`` (cone indices of the
+    program, each in path order): sum of a_e over its edges E minus the sum over every other
+    edge column <= abs(E) - 1, which every other 0/1 vector of edges satisfies (a lane that
+    extends it too). In the sided formulation each side's edges are taken in that side's
+    block. Our addition: ``rld.solver.RldModel.solve`` adds it, lazily like the cycle cuts,
+    for an optimum that the shared lane predicate rejects."""
+    sides = 2 if program.sided else 1
+    coef = np.full(sides * program.n_edges, -1.0)
+    n_in = 0
     for side, path in enumerate((left, right)):
         path = np.asarray(path, dtype=np.int64)
         if path.size < 2:
@@ -506,15 +510,15 @@ def lane_cut(program: LaneProgram, left: Sequence[int], right: Sequence[int]) ->
         k = np.asarray(program.edge_ids(path[:-1], path[1:]), dtype=np.int64)
         if np.any(k < 0):
             raise ValueError("lane_cut: an edge of the lane is not a candidate edge")
-        cols.append(program.block("a", side if program.sided else 0).start + k)
-    cols = np.concatenate(cols) if cols else np.zeros(0, dtype=np.int64)
-    if cols.size == 0:
+        coef[(side if program.sided else 0) * program.n_edges + k] = 1.0
+        n_in += k.size
+    if n_in == 0:
         raise ValueError("lane_cut: the lane has no edge")
-    A = sp.csr_matrix(
-        (np.ones(cols.size), (np.zeros(cols.size, dtype=np.int64), cols)),
-        shape=(1, program.n_cols),
-    )
-    program.add_rows(A, np.array([-np.inf]), np.array([cols.size - 1.0]), "lane_cut")
+    cols = np.concatenate([np.arange(program.block("a", s).start, program.block("a", s).stop)
+                           for s in range(sides)])
+    A = sp.csr_matrix((coef, (np.zeros(cols.size, dtype=np.int64), cols)),
+                      shape=(1, program.n_cols))
+    program.add_rows(A, np.array([-np.inf]), np.array([n_in - 1.0]), "lane_cut")
 
 
 def extract_paths(

@@ -4,8 +4,9 @@
 builds the program of ``rld.program`` over them, solves it with the chosen backend under the time
 budget, adds cycle-elimination cuts (RLD eq. 5) for any cycle in the solution and re-solves until
 the chosen edges are exactly two simple paths. When those paths fail the shared lane predicate
-(``rld.constraints.lane_is_feasible``: C_seg, C_width, C_poly, which CLC enumerates under), that
-edge set is cut off (``rld.program.lane_cut``) and the program solved again, up to
+(``rld.constraints.lane_is_feasible``: C_seg, C_width, C_poly, which CLC enumerates under;
+without C_width's upper bound, since the window can cut one boundary short), that lane is cut
+off (``rld.program.lane_cut``) and the program solved again, up to
 ``MAX_LANE_CUT_ROUNDS`` times within the budget; a lane still rejected is returned as no lane.
 Returns a ``Lane`` in the caller's indices.
 
@@ -203,8 +204,9 @@ class RldModel:
         t_solve = time.perf_counter()  # the budget bounds the solves, not the model update
         stats["lane_cut_rounds"] = 0
         # Lanes the program allows but the shared predicate (C_seg, C_width, C_poly:
-        # rld.constraints.lane_is_feasible, CLC's) rejects are cut off and the program solved
-        # again (lane_cut; docs/formulation.md). Only for the car's own lane: the incremental
+        # rld.constraints.lane_is_feasible, CLC's; not w_max, which the window's uneven ends
+        # break on true lanes) rejects are cut off and the program solved again (lane_cut;
+        # docs/formulation.md). Only for the car's own lane: the incremental
         # solver's frontier (window, fixed edges) is not a lane from the car.
         check = window_given is False and not fixed_edges and fixed_lane is None
         infeasible = False
@@ -230,7 +232,8 @@ class RldModel:
             if cycles or len(paths) != 2:
                 break
             pl, pr = self._orient(program, paths, sub, pose)
-            infeasible = not lane_is_feasible(sub[pl], sub[pr], self.params)
+            infeasible = not lane_is_feasible(sub[pl], sub[pr], self.params,
+                                              max_width=False)
             if (not infeasible or stats["lane_cut_rounds"] >= MAX_LANE_CUT_ROUNDS
                     or budget - (time.perf_counter() - t_solve) <= 0):
                 break

@@ -438,6 +438,9 @@ def test_lane_is_feasible_checks_every_constraint():
     assert not C.lane_is_feasible(left, right * [1, 0.26], p)  # 2.39 m: too narrow
     assert C.lane_is_feasible(left, right * [1, 0.34], p)  # 2.51 m: just wide enough
     assert not C.lane_is_feasible(left, right * [1, 3.1], p)  # 6.65 m: too wide
+    # Without the upper bound (RLD's window check) only the too-wide lane changes verdict.
+    assert C.lane_is_feasible(left, right * [1, 3.1], p, max_width=False)
+    assert not C.lane_is_feasible(left, right * [1, 0.26], p, max_width=False)
     far = np.array([[0, 2], [6, 2]], float)  # 6 m spacing
     assert not C.lane_is_feasible(far, right[:2], p)
     zigzag = np.array([[0, 2], [4, 2], [0, 2.5]], float)

@@ -346,9 +346,19 @@ def test_lane_cut_removes_exactly_that_lane(sided):
     lane_cut(prog, *paths)
     assert prog.family[-1] == "lane_cut"
     row = prog.A[-1].toarray().ravel()
-    assert row.sum() == sum(len(p) - 1 for p in paths) == prog.row_hi[-1] + 1
-    # The first optimum now breaks the row; the next optimum is another lane, no cheaper.
+    a_cols = np.concatenate([np.arange(prog.block("a", s).start, prog.block("a", s).stop)
+                             for s in ((0, 1) if sided else (0,))])
+    n_edges = sum(len(p) - 1 for p in paths)
+    assert (row == 1).sum() == n_edges == prog.row_hi[-1] + 1
+    assert (row[a_cols] == -1).sum() == a_cols.size - n_edges and not np.delete(row, a_cols).any()
+    # The first optimum now breaks the row, and nothing else does: a lane with one more edge
+    # than it still satisfies it.
     assert row @ first.x > prog.row_hi[-1]
+    other = np.flatnonzero(row == -1)[0]
+    bigger = first.x.copy()
+    bigger[other] = 1.0
+    assert row @ bigger <= prog.row_hi[-1]
+    # The next optimum is another lane, no cheaper.
     second = be.solve(prog, 20.0)
     assert second.status == "optimal"
     assert row @ second.x <= prog.row_hi[-1]
@@ -374,7 +384,7 @@ def test_rld_never_returns_a_lane_the_shared_predicate_rejects():
         lane = solve_lane(points, pose, method="rld", time_limit_s=5)
         if lane.ok:
             found += 1
-            assert C.lane_is_feasible(lane.left_xy, lane.right_xy, PARAMS)
+            assert C.lane_is_feasible(lane.left_xy, lane.right_xy, PARAMS, max_width=False)
     assert found >= 10
 
 
