@@ -16,6 +16,7 @@ next-vertex and left-right deciders (section V) and, when warm-started, by the p
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -235,7 +236,8 @@ def path_ahead(points: np.ndarray, path: np.ndarray, pose: Pose) -> float:
 def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
                     start: tuple[int, int], left: np.ndarray, right: np.ndarray,
                     margin: float, reach_m: float, iterations: int,
-                    skip: set | None = None, cut_other: bool = False) -> list[SearchResult]:
+                    skip: set | None = None, cut_other: bool = False,
+                   deadline: float = math.inf) -> list[SearchResult]:
     """Searches that revisit the close calls of a lane found under the iteration limit (our
     addition, docs/clc.md). The depth-first search changes a choice near the car only after it
     has exhausted everything beyond it, which under it_max it never does. For every position j
@@ -256,7 +258,10 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
     nearest path[j - 1] (the last cone kept on this side), so the dive rebuilds both boundaries
     from beside the choice. For a lane that stops short (``clc.solver.SHORT_LANE_M``): when a
     wrong choice on one side has taken a cone of the other boundary, that side was bent to
-    match, and a dive that kept it whole could not reach the true lane."""
+    match, and a dive that kept it whole could not reach the true lane.
+
+    ``deadline`` (``time.perf_counter()``): no search starts after it (the caller's time
+    budget); the close calls not revisited are not added to ``skip``."""
     out = []
     hx, hy = float(np.cos(pose.yaw)), float(np.sin(pose.yaw))
     left = np.ascontiguousarray(left, dtype=np.int64)
@@ -273,6 +278,8 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
                                                        other, float(params.skipped_cone_m),
                                                        reach))
         for j in pos:
+            if time.perf_counter() > deadline:
+                return out
             if skip is not None:
                 key = (side, path[:j + 1].tobytes(), other.tobytes(), cut_other)
                 if key in skip:

@@ -17,14 +17,18 @@ adds just the two closing edges to a candidate already found, and checking it co
 predicate (about 0.5 ms on a full-lap lane), which for every closable candidate of a full map
 (tens of them) would dominate the call.
 
-Time: the search is bounded by ``max_iterations`` (its run time grows linearly with them, CLC
-fig. 16), not by a clock inside the compiled loop; ``time_limit_s`` is accepted for the common
-interface and ``lane.stats["over_time_limit"]`` says when a call exceeded it.
+Time: each search is bounded by ``max_iterations`` (its run time grows linearly with them, CLC
+fig. 16), not by a clock inside the compiled loop. ``time_limit_s`` is checked between the
+searches: past it, no search starts that would only refine a lane already found (runner-up
+start pairs, the trapped search's rerun, the dives); ``lane.stats["cut_short"]`` says when that
+happened and ``lane.stats["over_time_limit"]`` when the call still exceeded the budget (by at
+most one search).
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import time
 
 import numpy as np
@@ -194,7 +198,7 @@ class ClcModel:
             return merge_results(res, again), True
         return res, False
 
-    def _dive_rounds(self, points, pose, res, winner):
+    def _dive_rounds(self, points, pose, res, winner, deadline=math.inf):
         """The contested-choice dives (``clc.search.contested_dives``) around ``winner``
         (left, right, closed, score), in rounds: the ranker's pick of every dive is a finalist
         beside the winner; they differ from it at a close call and are about as long, so the
@@ -214,9 +218,10 @@ class ClcModel:
         A winner that stops short of the map (``_short``, SHORT_LANE_M) also has every choice
         within the reach revisited in that round, each of these dives rebuilding the other
         boundary from beside the choice (``contested_dives(..., cut_other=True)``).
+        No dive starts after ``deadline`` (``time.perf_counter()``).
         Returns the final (left, right, closed, score), the dives run, their iterations, the
-        rounds run (a round that changes nothing ends them) and the rounds whose winner was
-        short."""
+        rounds run (a round that changes nothing ends them), the rounds whose winner was
+        short, and whether the deadline stopped them."""
         p = self.params
         done: set[tuple] = set()
         n_dives = iterations = rounds = short_rounds = 0
@@ -224,18 +229,23 @@ class ClcModel:
         # Whether the map reaches beyond SHORT_LANE_M (_short): found at most once per call,
         # when a winner is short (it does not depend on the winner; 9 us on a 409-cone map).
         beyond: list[bool] = []
+        cut = False
         while rounds < DIVE_ROUNDS:
+            if time.perf_counter() > deadline:
+                cut = True
+                break
             rounds += 1
             left, right = winner[0], winner[1]
             budget = DIVE_ITERATIONS + left.size + right.size
             dives = contested_dives(points, pose, p, res.graph, res.start, left, right,
-                                    p.contested_margin, DIVE_REACH_M, budget, skip=done)
+                                    p.contested_margin, DIVE_REACH_M, budget, skip=done,
+                                    deadline=deadline)
             if SHORT_LANE_M > 0 and _short(points, pose, left, right, SHORT_LANE_M, beyond):
                 # A short winner: also every choice within the reach, both boundaries rebuilt.
                 short_rounds += 1
                 dives += contested_dives(points, pose, p, res.graph, res.start, left, right,
                                          np.inf, DIVE_REACH_M, budget, skip=done,
-                                         cut_other=True)
+                                         cut_other=True, deadline=deadline)
             best, best_cost = None, cost
             for dive in dives:
                 n_dives += 1
@@ -252,15 +262,21 @@ class ClcModel:
                 dc = lane_cost(points, a, b, pose, p, closed=c, radius_m=DIVE_REACH_M)
                 if dc < best_cost:  # ties: the earlier lane
                     best, best_cost = (a.copy(), b.copy(), c, float(s[k])), dc
+            cut = cut or time.perf_counter() > deadline
             if best is None:
                 break
             winner, cost = best, best_cost
-        return (*winner, n_dives, iterations, rounds, short_rounds)
+        return (*winner, n_dives, iterations, rounds, short_rounds, cut)
 
     def solve(self, points: np.ndarray, pose: Pose, colors=None, time_limit_s=None,
               confidence=None) -> Lane:
         t0 = time.perf_counter()
-        stats: dict = {"ranker": self.ranker_name, "graph": self.graph}
+        # The compiled searches have no clock (max_iterations bounds each); the budget is
+        # checked between them: past it, the searches that refine a lane already found (the
+        # runner-up start pairs once a lane exists, the trapped search's rerun, the dives) are
+        # skipped, and lane.stats["cut_short"] says so.
+        deadline = t0 + time_limit_s if time_limit_s is not None else math.inf
+        stats: dict = {"ranker": self.ranker_name, "graph": self.graph, "cut_short": False}
         pairs = starting_vertex_pairs(points, pose, self.params.near_radius_m,
                                       int(self.params.start_pairs),
                                       self.params.start_min_width_m,
@@ -285,6 +301,9 @@ class ClcModel:
         for rank, other in enumerate(pairs[1:], start=1):
             if depth >= MIN_START_DEPTH:
                 break
+            if depth > 0 and time.perf_counter() > deadline:
+                stats["cut_short"] = True
+                break
             nxt = enumerate_candidates(points, pose, self.params, graph=res.graph, start=other)
             fallbacks, iterations = fallbacks + 1, iterations + nxt.iterations
             d = _depth(nxt)
@@ -294,7 +313,10 @@ class ClcModel:
         stats["trapped"] = False  # the search was trapped and run again (_untrap)
         if guide is None:
             before = res.iterations
-            res, stats["trapped"] = self._untrap(points, pose, res)
+            if time.perf_counter() > deadline:
+                stats["cut_short"] = True
+            else:
+                res, stats["trapped"] = self._untrap(points, pose, res)
             iterations += res.iterations - before
         stats.update(iterations=iterations, complete=res.complete,
                      n_candidates=len(res.candidates), n_cones_used=int(points.shape[0]))
@@ -317,8 +339,9 @@ class ClcModel:
         score = float(scores[best])
         n_dives = rounds = short_rounds = 0
         if not res.complete and self.params.contested_margin > 0:
-            left, right, closed, score, n_dives, it, rounds, short_rounds = self._dive_rounds(
-                points, pose, res, (left, right, closed, score))
+            (left, right, closed, score, n_dives, it, rounds, short_rounds,
+             cut) = self._dive_rounds(points, pose, res, (left, right, closed, score), deadline)
+            stats["cut_short"] |= cut
             iterations += it
         stats.update(dives=n_dives, dive_rounds=rounds, short_lane_rounds=short_rounds,
                      iterations=iterations)

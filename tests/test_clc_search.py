@@ -1078,3 +1078,18 @@ def test_trapped_search_is_searched_again_track6(dataset_dir, monkeypatch):
     assert run() == (True, False)
     monkeypatch.setattr(clc.solver, "TRAPPED_CANDIDATES", 20)
     assert run() == (False, True)
+
+
+def test_time_budget_skips_the_refining_searches():
+    # 300 cones in a 10 m square: every cone is a neighbour of most others, so each search is
+    # slow and the call runs the trapped search's rerun and many dives. Past the budget none
+    # of them starts; the main search's lane is still returned. (No timing is asserted: the
+    # budget is checked between searches, and 1e-9 s has passed before the first check.)
+    pts = np.random.default_rng(0).uniform(-5, 5, (300, 2))
+    free = solve_lane(pts, (0.0, 0.0, 0.0), method="clc")
+    assert free.ok and free.stats["dives"] > 0 and free.stats["trapped"]
+    assert not free.stats["cut_short"]
+    tight = solve_lane(pts, (0.0, 0.0, 0.0), method="clc", time_limit_s=1e-9)
+    assert tight.ok and tight.stats["cut_short"] and tight.stats["over_time_limit"]
+    assert tight.stats["dives"] == 0 and not tight.stats["trapped"]
+    assert tight.stats["iterations"] == LaneParams().max_iterations
