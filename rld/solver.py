@@ -209,7 +209,6 @@ class RldModel:
         # docs/formulation.md). Only for the car's own lane: the incremental
         # solver's frontier (window, fixed edges) is not a lane from the car.
         check = window_given is False and not fixed_edges and fixed_lane is None
-        infeasible = False
         while True:
             while True:
                 remaining = budget - (time.perf_counter() - t_solve)
@@ -232,9 +231,8 @@ class RldModel:
             if cycles or len(paths) != 2:
                 break
             pl, pr = self._orient(program, paths, sub, pose)
-            infeasible = not lane_is_feasible(sub[pl], sub[pr], self.params,
-                                              max_width=False)
-            if (not infeasible or stats["lane_cut_rounds"] >= MAX_LANE_CUT_ROUNDS
+            if (lane_is_feasible(sub[pl], sub[pr], self.params, max_width=False)
+                    or stats["lane_cut_rounds"] >= MAX_LANE_CUT_ROUNDS
                     or budget - (time.perf_counter() - t_solve) <= 0):
                 break
             stats["lane_cut_rounds"] += 1
@@ -266,7 +264,9 @@ class RldModel:
             return Lane.not_found(points, f"solution has {len(paths)} paths", stats=stats)
         stats["formulation"] = "sided" if program.sided else "paper"
         left, right = self._orient(program, paths, sub, pose)
-        if infeasible:
+        # The verdict on the lane returned, whichever way the loop ended (a cycle dropped when
+        # the budget ran out included).
+        if check and not lane_is_feasible(sub[left], sub[right], self.params, max_width=False):
             n = stats["lane_cut_rounds"]
             why = ("the round limit" if n >= MAX_LANE_CUT_ROUNDS else "the time budget")
             return Lane.not_found(
