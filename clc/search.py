@@ -237,7 +237,8 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
                     start: tuple[int, int], left: np.ndarray, right: np.ndarray,
                     margin: float, reach_m: float, iterations: int,
                     skip: set | None = None, cut_other: bool = False,
-                   deadline: float = math.inf) -> list[SearchResult]:
+                   deadline: float = math.inf,
+                   stopped: list | None = None) -> list[SearchResult]:
     """Searches that revisit the close calls of a lane found under the iteration limit (our
     addition, docs/clc.md). The depth-first search changes a choice near the car only after it
     has exhausted everything beyond it, which under it_max it never does. For every position j
@@ -261,7 +262,8 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
     match, and a dive that kept it whole could not reach the true lane.
 
     ``deadline`` (``time.perf_counter()``): no search starts after it (the caller's time
-    budget); the close calls not revisited are not added to ``skip``."""
+    budget); the close calls not revisited are not added to ``skip``, and ``True`` is appended
+    to ``stopped`` (when given)."""
     out = []
     hx, hy = float(np.cos(pose.yaw)), float(np.sin(pose.yaw))
     left = np.ascontiguousarray(left, dtype=np.int64)
@@ -279,6 +281,8 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
                                                        reach))
         for j in pos:
             if time.perf_counter() > deadline:
+                if stopped is not None:
+                    stopped.append(True)
                 return out
             if skip is not None:
                 key = (side, path[:j + 1].tobytes(), other.tobytes(), cut_other)

@@ -230,6 +230,7 @@ class ClcModel:
         # when a winner is short (it does not depend on the winner; 9 us on a 409-cone map).
         beyond: list[bool] = []
         cut = False
+        stopped: list[bool] = []  # contested_dives stopped at the deadline
         while rounds < DIVE_ROUNDS:
             if time.perf_counter() > deadline:
                 cut = True
@@ -239,13 +240,14 @@ class ClcModel:
             budget = DIVE_ITERATIONS + left.size + right.size
             dives = contested_dives(points, pose, p, res.graph, res.start, left, right,
                                     p.contested_margin, DIVE_REACH_M, budget, skip=done,
-                                    deadline=deadline)
+                                    deadline=deadline, stopped=stopped)
             if SHORT_LANE_M > 0 and _short(points, pose, left, right, SHORT_LANE_M, beyond):
                 # A short winner: also every choice within the reach, both boundaries rebuilt.
                 short_rounds += 1
                 dives += contested_dives(points, pose, p, res.graph, res.start, left, right,
                                          np.inf, DIVE_REACH_M, budget, skip=done,
-                                         cut_other=True, deadline=deadline)
+                                         cut_other=True, deadline=deadline,
+                                         stopped=stopped)
             best, best_cost = None, cost
             for dive in dives:
                 n_dives += 1
@@ -262,11 +264,10 @@ class ClcModel:
                 dc = lane_cost(points, a, b, pose, p, closed=c, radius_m=DIVE_REACH_M)
                 if dc < best_cost:  # ties: the earlier lane
                     best, best_cost = (a.copy(), b.copy(), c, float(s[k])), dc
-            cut = cut or time.perf_counter() > deadline
             if best is None:
                 break
             winner, cost = best, best_cost
-        return (*winner, n_dives, iterations, rounds, short_rounds, cut)
+        return (*winner, n_dives, iterations, rounds, short_rounds, cut or bool(stopped))
 
     def solve(self, points: np.ndarray, pose: Pose, colors=None, time_limit_s=None,
               confidence=None) -> Lane:
