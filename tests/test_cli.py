@@ -9,7 +9,7 @@ def test_demo_prints_a_summary_and_writes_a_plot(tmp_path):
     out = tmp_path / "lane.png"
     result = CliRunner().invoke(main, ["demo", "--out", str(out)])
     assert result.exit_code == 0, result.output
-    for word in ("track", "frame", "status", "score", "IoU"):
+    for word in ("track", "frame", "status", "solve time", "again", "score", "IoU"):
         assert word in result.output
     assert out.exists() and out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
