@@ -486,11 +486,15 @@ def cycle_cut(program: LaneProgram, cones: list[int]) -> None:
     # In the sided formulation both sides' edges inside S count: two paths have even fewer.
     cols = np.concatenate([program.block("a", k).start + inside
                            for k in range(2 if program.sided else 1)])
-    A = sp.csr_matrix(
-        (np.ones(cols.size), (np.zeros(cols.size, dtype=np.int64), cols)),
-        shape=(1, program.n_cols),
-    )
-    program.add_rows(A, np.array([-np.inf]), np.array([len(cones) - 1.0]), "cycle_cut")
+    _add_lazy_row(program, cols, np.ones(cols.size), len(cones) - 1.0, "cycle_cut")
+
+
+def _add_lazy_row(program: LaneProgram, cols: np.ndarray, coef: np.ndarray, hi: float,
+                  family: str) -> None:
+    """Append one row ``coef . x[cols] <= hi`` (the lazy cuts)."""
+    A = sp.csr_matrix((coef, (np.zeros(cols.size, dtype=np.int64), cols)),
+                      shape=(1, program.n_cols))
+    program.add_rows(A, np.array([-np.inf]), np.array([hi]), family)
 
 
 def lane_cut(program: LaneProgram, left: Sequence[int], right: Sequence[int]) -> None:
@@ -516,9 +520,7 @@ def lane_cut(program: LaneProgram, left: Sequence[int], right: Sequence[int]) ->
         raise ValueError("lane_cut: the lane has no edge")
     cols = np.concatenate([np.arange(program.block("a", s).start, program.block("a", s).stop)
                            for s in range(sides)])
-    A = sp.csr_matrix((coef, (np.zeros(cols.size, dtype=np.int64), cols)),
-                      shape=(1, program.n_cols))
-    program.add_rows(A, np.array([-np.inf]), np.array([n_in - 1.0]), "lane_cut")
+    _add_lazy_row(program, cols, coef, n_in - 1.0, "lane_cut")
 
 
 def extract_paths(

@@ -148,7 +148,12 @@ class RldModel:
                 "the car",
                 stats={"backend": self.backend.name},
             )
-        window_given = window is not None
+        # Lanes the program allows but the shared predicate (C_seg, C_width, C_poly:
+        # rld.constraints.lane_is_feasible, CLC's; not w_max, which the window's uneven ends
+        # break on true lanes) rejects are cut off and the program solved again (lane_cut;
+        # docs/formulation.md). Only for the car's own lane: the incremental solver's frontier
+        # (a window given, fixed edges, a fixed lane) is not a lane from the car.
+        check = window is None and not fixed_edges and fixed_lane is None
         if window is None:
             window, horizon = cone_window(points, pose, self.params)
         else:
@@ -203,12 +208,14 @@ class RldModel:
         result = None
         t_solve = time.perf_counter()  # the budget bounds the solves, not the model update
         stats["lane_cut_rounds"] = 0
-        # Lanes the program allows but the shared predicate (C_seg, C_width, C_poly:
-        # rld.constraints.lane_is_feasible, CLC's; not w_max, which the window's uneven ends
-        # break on true lanes) rejects are cut off and the program solved again (lane_cut;
-        # docs/formulation.md). Only for the car's own lane: the incremental
-        # solver's frontier (window, fixed edges) is not a lane from the car.
-        check = window_given is False and not fixed_edges and fixed_lane is None
+        verdicts: dict[tuple, bool] = {}  # each lane checked once
+
+        def feasible(lt: list[int], rt: list[int]) -> bool:
+            key = (tuple(lt), tuple(rt))
+            if key not in verdicts:
+                verdicts[key] = lane_is_feasible(sub[lt], sub[rt], self.params, max_width=False)
+            return verdicts[key]
+
         while True:
             while True:
                 remaining = budget - (time.perf_counter() - t_solve)
@@ -231,7 +238,7 @@ class RldModel:
             if cycles or len(paths) != 2:
                 break
             pl, pr = self._orient(program, paths, sub, pose)
-            if (lane_is_feasible(sub[pl], sub[pr], self.params, max_width=False)
+            if (feasible(pl, pr)
                     or stats["lane_cut_rounds"] >= MAX_LANE_CUT_ROUNDS
                     or budget - (time.perf_counter() - t_solve) <= 0):
                 break
@@ -266,7 +273,7 @@ class RldModel:
         left, right = self._orient(program, paths, sub, pose)
         # The verdict on the lane returned, whichever way the loop ended (a cycle dropped when
         # the budget ran out included).
-        if check and not lane_is_feasible(sub[left], sub[right], self.params, max_width=False):
+        if check and not feasible(left, right):
             n = stats["lane_cut_rounds"]
             why = ("the round limit" if n >= MAX_LANE_CUT_ROUNDS else "the time budget")
             return Lane.not_found(

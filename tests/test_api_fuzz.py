@@ -39,7 +39,7 @@ def scenes(draw):
     elif kind == "line":
         n = int(rng.integers(4, 16))
         pts = np.column_stack([np.arange(n) * rng.uniform(0.5, 4.0), np.zeros(n)])
-        pts = pts @ np.array([[1.0, 0.0], [0.0, 1.0]]) + [rng.uniform(-3, 0), 0.0]
+        pts = pts + [rng.uniform(-3, 0), 0.0]
     elif kind == "ring":
         n = int(rng.integers(6, 40))
         r = rng.uniform(3.0, 15.0)
