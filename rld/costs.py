@@ -20,6 +20,7 @@ __all__ = [
     "spacing_cost",
     "angle_cost",
     "heading_cost",
+    "regularity_cost",
     "high_cost_mask",
     "edge_objective",
     "lane_cost",
@@ -56,6 +57,19 @@ def angle_cost(turns_rad: np.ndarray, tolerance_rad: float) -> np.ndarray:
     ``angle - pi = -|turn|`` and the cost is (|turn| / theta_t)^4.
     """
     return (np.abs(np.asarray(turns_rad, dtype=np.float64)) / tolerance_rad) ** 4
+
+
+def regularity_cost(len_a: np.ndarray, len_b: np.ndarray, tolerance: float) -> np.ndarray:
+    """Spacing regularity, our extension (not in either paper): (ln(D_a / D_b) / ln(rho_t))^2
+    for two consecutive edges of one boundary, of lengths ``len_a`` and ``len_b`` (metres, > 0),
+    with ``tolerance`` = rho_t > 1: 0 for equal edges, 1 when one is rho_t times the other,
+    the same read in either direction. A false positive inserted into a boundary splits one
+    edge beside whole ones; the paper's spacing cost (eq. 18) scores each edge alone. RLD pays
+    it on the angle variables f_ijk (eq. 29 gets ``w_regularity`` times it beside w_t t_ijk).
+    The square, not the fourth power of eqs 18 and 20: measured better in the paper's
+    experiment (docs/benchmarks.md)."""
+    r = np.log(np.asarray(len_a, dtype=np.float64) / np.asarray(len_b, dtype=np.float64))
+    return (r / math.log(tolerance)) ** 2
 
 
 def heading_cost(
@@ -161,6 +175,10 @@ def lane_cost(
         total += float(edge_objective(points, edges, pose, params, colors, heading).sum())
         turns = geo.polyline_turn_angles(points[idx], closed=True)
         total += params.w_angle * float(angle_cost(turns, params.angle_tolerance_rad).sum())
+        if params.w_regularity:
+            lens = np.hypot(*np.diff(points[seq], axis=0).T)
+            total += params.w_regularity * float(regularity_cost(
+                lens, np.roll(lens, 1), params.regularity_tolerance).sum())
     return total
 
 
@@ -206,6 +224,11 @@ def open_path_costs(points: np.ndarray, flat: np.ndarray, ptr: np.ndarray, pose:
                                 points[flat[2:][same3]])
         np.add.at(out, owner[:-2][same3],
                   params.w_angle * angle_cost(turns, params.angle_tolerance_rad))
+        if params.w_regularity:
+            a, b, c = (points[flat[:-2][same3]], points[flat[1:-1][same3]],
+                       points[flat[2:][same3]])
+            np.add.at(out, owner[:-2][same3], params.w_regularity * regularity_cost(
+                np.hypot(*(b - a).T), np.hypot(*(c - b).T), params.regularity_tolerance))
     return out
 
 

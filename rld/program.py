@@ -308,6 +308,9 @@ def build_program(
         blocks.append((a0, f0, g0, m0))
         c[a0:f0] = edge_cost
         c[f0:g0] = p.w_angle * t_cost_kept
+        if p.w_regularity:
+            c[f0:g0] += p.w_regularity * costs.regularity_cost(
+                lengths[triples[:, 3]], lengths[triples[:, 4]], p.regularity_tolerance)
         c[g0:m0] = cone_cost
         if sided and colors is not None:
             c[g0:m0] += p.w_color * (colors == (2 if k == 0 else 1))

@@ -130,3 +130,28 @@ def test_lane_cost_within_radius_ignores_the_far_part(seed, radius, extra):
         assert costs.lane_cost(pts, longer, ri, CAR, p, radius_m=radius) == pytest.approx(base)
     if (np.hypot(*pts[:16].T) <= radius).all():
         assert base == pytest.approx(costs.lane_cost(pts, li, ri, CAR, p))
+
+
+def test_regularity_cost_hand_worked():
+    """(ln(D_a / D_b) / ln(rho_t))^2: 0 for equal edges, 1 at the tolerance ratio, read in
+    either direction; in ``lane_cost`` once per interior cone, closed lanes at every cone."""
+    assert costs.regularity_cost(np.array([3.0, 2.0, 4.0]), np.array([3.0, 4.0, 2.0]),
+                                 2.0) == pytest.approx([0.0, 1.0, 1.0])
+    assert costs.regularity_cost(8.0, 2.0, 2.0) == pytest.approx(4.0)  # (ln 4 / ln 2)^2
+    p = LaneParams(w_regularity=3.0, regularity_tolerance=2.0)
+    off = LaneParams()
+    line = np.array([[0.0, 2.0], [2.0, 2.0], [6.0, 2.0], [10.0, 2.0]])  # edges 2, 4, 4
+    extra = costs.lane_cost(line, [0, 1, 2, 3], [], CAR, p) - \
+        costs.lane_cost(line, [0, 1, 2, 3], [], CAR, off)
+    assert extra == pytest.approx(3.0 * 1.0)  # cone 1: ratio 2; cone 2: ratio 1
+    # A closed square of sides 2, 2, 2, 2 and a rectangle of sides 2, 4, 2, 4.
+    sq = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]])
+    rect = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 2.0], [0.0, 2.0]])
+    d_sq = costs.lane_cost(sq, [0, 1, 2, 3], [], CAR, p, closed=True) - \
+        costs.lane_cost(sq, [0, 1, 2, 3], [], CAR, off, closed=True)
+    d_rect = costs.lane_cost(rect, [0, 1, 2, 3], [], CAR, p, closed=True) - \
+        costs.lane_cost(rect, [0, 1, 2, 3], [], CAR, off, closed=True)
+    assert d_sq == pytest.approx(0.0)
+    assert d_rect == pytest.approx(3.0 * 4)  # every cone joins a 2 m and a 4 m edge
+    with pytest.raises(ValueError, match="regularity_tolerance"):
+        LaneParams(regularity_tolerance=1.0)

@@ -3,6 +3,7 @@ start, fixed start, time budget."""
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 
@@ -403,6 +404,36 @@ def test_colour_and_confidence_costs_against_brute_force(seed, sided):
         assert math.isinf(got)
     else:
         assert got == pytest.approx(expect, abs=1e-6)
+
+
+@pytest.mark.parametrize("sided", [False, True], ids=["paper", "sided"])
+@pytest.mark.parametrize("seed", range(15))
+def test_regularity_cost_against_brute_force(seed, sided):
+    """The regularity term on the angle variables (``w_regularity``) is the shared
+    ``lane_cost``'s: the program's optimum is the brute-force one."""
+    p = dataclasses.replace(PARAMS, w_regularity=2.0, regularity_tolerance=1.5)
+    points, pose = instance(4000 + seed, 5 + seed % 3)
+    expect = brute_force_optimum(points, pose, p, sided=sided)
+    got, _ = solve_program(points, pose, p, sided=sided)
+    if math.isinf(expect):
+        assert math.isinf(got)
+    else:
+        assert got == pytest.approx(expect, abs=1e-6)
+
+
+def test_regularity_cost_changes_the_optimum():
+    """Not a no-op: a cone that splits an edge of a regular boundary in two is taken without
+    the term (one more edge's benefit) and left out with it."""
+    xs = np.array([0.0, 3.5, 7.0, 8.75, 10.5])  # 8.75: splits the 3.5 m edge 7 -> 10.5
+    left = np.column_stack([xs, np.full(5, 2.0)])
+    right = np.column_stack([[0.0, 3.5, 7.0, 10.5], np.full(4, -2.0)])
+    points = np.vstack([left, right])
+    pose = Pose(0.5, 0.0, 0.0)
+    off = LaneSolver("rld", PARAMS, "highs").solve(points, pose)
+    on = LaneSolver("rld", dataclasses.replace(PARAMS, w_regularity=2.0),
+                    "highs").solve(points, pose)
+    assert 3 in off.left
+    assert 3 not in on.left and 4 in on.left
 
 
 def test_colour_and_confidence_costs_hand_worked():
