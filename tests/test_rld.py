@@ -195,9 +195,14 @@ def solve_program(points, pose, p, backend="highs", prune=True, sided=False, col
 @pytest.mark.parametrize("seed", range(60))
 def test_program_optimum_equals_brute_force(seed, sided):
     n = 5 + seed % 3  # 5, 6, 7 cones
-    points, pose = instance(seed, n)
-    expect = brute_force_optimum(points, pose, PARAMS, sided=sided)
-    got, _ = solve_program(points, pose, PARAMS, sided=sided)
+    assert_optimum_is_brute_force(*instance(seed, n), PARAMS, sided)
+
+
+def assert_optimum_is_brute_force(points, pose, p, sided, **costs_given):
+    """The program's optimum equals the brute-force minimum of ``lane_cost`` (both infinite
+    when there is no lane); ``costs_given``: ``colors`` and ``confidence``."""
+    expect = brute_force_optimum(points, pose, p, sided=sided, **costs_given)
+    got, _ = solve_program(points, pose, p, sided=sided, **costs_given)
     if math.isinf(expect):
         assert math.isinf(got)
     else:
@@ -396,14 +401,8 @@ def test_colour_and_confidence_costs_against_brute_force(seed, sided):
     rng = np.random.default_rng(seed)
     colors = rng.integers(0, 3, size=points.shape[0])  # random, so often wrong
     confidence = rng.uniform(0, 1, size=points.shape[0])
-    expect = brute_force_optimum(points, pose, PARAMS, sided=sided, colors=colors,
-                                 confidence=confidence)
-    got, _ = solve_program(points, pose, PARAMS, sided=sided, colors=colors,
-                           confidence=confidence)
-    if math.isinf(expect):
-        assert math.isinf(got)
-    else:
-        assert got == pytest.approx(expect, abs=1e-6)
+    assert_optimum_is_brute_force(points, pose, PARAMS, sided, colors=colors,
+                                  confidence=confidence)
 
 
 @pytest.mark.parametrize("sided", [False, True], ids=["paper", "sided"])
@@ -412,13 +411,7 @@ def test_regularity_cost_against_brute_force(seed, sided):
     """The regularity term on the angle variables (``w_regularity``) is the shared
     ``lane_cost``'s: the program's optimum is the brute-force one."""
     p = dataclasses.replace(PARAMS, w_regularity=2.0, regularity_tolerance=1.5)
-    points, pose = instance(4000 + seed, 5 + seed % 3)
-    expect = brute_force_optimum(points, pose, p, sided=sided)
-    got, _ = solve_program(points, pose, p, sided=sided)
-    if math.isinf(expect):
-        assert math.isinf(got)
-    else:
-        assert got == pytest.approx(expect, abs=1e-6)
+    assert_optimum_is_brute_force(*instance(4000 + seed, 5 + seed % 3), p, sided)
 
 
 def test_regularity_cost_changes_the_optimum():
