@@ -46,10 +46,10 @@ from clc.search import (
     path_ahead,
 )
 from rld.constraints import lane_is_feasible, starting_vertex_pairs
-from rld.costs import lane_cost
+from rld.costs import lane_cost, width_roughness, within_radius
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
-__all__ = ["ClcModel", "MATCH_TOLERANCE_M"]
+__all__ = ["ClcModel", "MATCH_TOLERANCE_M", "dive_cost"]
 
 log = logging.getLogger(__name__)
 
@@ -86,6 +86,22 @@ TRAPPED_CANDIDATES = 20
 STALE_EXTENSIONS = 8
 #: Drop a closed lane's join cone when the ring is cheaper without it (``drop_ring_join``).
 RING_JOIN = True
+
+
+def dive_cost(points: np.ndarray, pose: Pose, params: LaneParams, left: np.ndarray,
+              right: np.ndarray, closed: bool = False) -> float:
+    """What the dive judge minimises (``ClcModel._dive_rounds``): RLD's objective (the shared
+    ``lane_cost``, eq. 29) counted within ``DIVE_REACH_M`` of the car, plus
+    ``params.w_width_roughness`` times the width roughness (``rld.costs.width_roughness``, ours)
+    of the same part of each boundary (``within_radius``). The roughness tells a true cone from
+    a false positive 0.6-1.5 m beside it when both make equally smooth lines: the false one
+    jogs the width (measured in ``LaneParams.w_width_roughness``)."""
+    cost = lane_cost(points, left, right, pose, params, closed=closed, radius_m=DIVE_REACH_M)
+    if params.w_width_roughness:
+        a = within_radius(points, left, pose, DIVE_REACH_M)
+        b = within_radius(points, right, pose, DIVE_REACH_M)
+        cost += params.w_width_roughness * width_roughness(points[a], points[b])
+    return cost
 
 
 def _depth(res) -> int:
@@ -202,8 +218,9 @@ class ClcModel:
         """The contested-choice dives (``clc.search.contested_dives``) around ``winner``
         (left, right, closed, score), in rounds: the ranker's pick of every dive is a finalist
         beside the winner; they differ from it at a close call and are about as long, so the
-        ranker's features barely tell them apart, and RLD's objective (the shared
-        ``lane_cost``, eq. 29) decides, counted within DIVE_REACH_M of the car (``radius_m``):
+        ranker's features barely tell them apart, and ``dive_cost`` decides: RLD's objective
+        (the shared ``lane_cost``, eq. 29) and, since 2026-12-03, the width roughness, counted
+        within DIVE_REACH_M of the car (``radius_m``):
         a dive changes the lane only within the reach, and what it builds beyond in its 40
         iterations is shorter or longer than the winner's tail by chance, which the whole-lane
         objective (a benefit for every edge) would weigh as much as the close call itself.
@@ -259,9 +276,8 @@ class ClcModel:
                 k = int(np.argmax(s))
                 a, b, c = dive.candidates[k]
                 if cost is None:
-                    cost = best_cost = lane_cost(points, winner[0], winner[1], pose, p,
-                                                 closed=winner[2], radius_m=DIVE_REACH_M)
-                dc = lane_cost(points, a, b, pose, p, closed=c, radius_m=DIVE_REACH_M)
+                    cost = best_cost = dive_cost(points, pose, p, *winner[:3])
+                dc = dive_cost(points, pose, p, a, b, c)
                 if dc < best_cost:  # ties: the earlier lane
                     best, best_cost = (a.copy(), b.copy(), c, float(s[k])), dc
             if best is None:

@@ -21,6 +21,7 @@ __all__ = [
     "angle_cost",
     "heading_cost",
     "regularity_cost",
+    "width_roughness",
     "high_cost_mask",
     "edge_objective",
     "lane_cost",
@@ -70,6 +71,32 @@ def regularity_cost(len_a: np.ndarray, len_b: np.ndarray, tolerance: float) -> n
     experiment (docs/benchmarks.md)."""
     r = np.log(np.asarray(len_a, dtype=np.float64) / np.asarray(len_b, dtype=np.float64))
     return (r / math.log(tolerance)) ** 2
+
+
+def width_roughness(left_xy: np.ndarray, right_xy: np.ndarray) -> float:
+    """How unevenly the lane's width changes from cone to cone, m^2 (ours, not in either
+    paper): for each boundary, the lengths of its cones' matching lines (CLC eq. 9 with the
+    vertices as queries: each cone's distance to the other boundary's polyline, the diagonal
+    to its end cone for a cone past its end), in order, and the sum of the squared second
+    differences of that sequence; both boundaries summed. 0 for parallel boundaries of equal
+    extent, small where the width changes smoothly along the lane; a cone 1 m off an otherwise
+    straight boundary of a 4 m lane adds 1 + 4 + 1 = 6 m^2 on its own side, plus the change it
+    makes to the other side's lengths. A side of fewer than 3 cones, or facing fewer than 2,
+    adds 0. Measured against counting only the cones beside the other boundary
+    (``overlap_widths``' pairing), this form did better on the shared tracks (docs/clc.md).
+    ``left_xy``, ``right_xy``: (n, 2) and (m, 2), metres, each ordered from the car forward.
+    CLC's dive judge (``clc.solver.dive_cost``) adds ``LaneParams.w_width_roughness`` times it
+    to RLD's objective: a false positive 0.6-1.5 m beside a true cone makes a line as smooth
+    as the true one, but jogs the width."""
+    L = np.asarray(left_xy, dtype=np.float64).reshape(-1, 2)
+    R = np.asarray(right_xy, dtype=np.float64).reshape(-1, 2)
+    total = 0.0
+    for Q, T in ((L, R), (R, L)):
+        if Q.shape[0] < 3 or T.shape[0] < 2:
+            continue
+        w = geo.point_polyline_distance(Q, T)
+        total += float(((w[:-2] - 2.0 * w[1:-1] + w[2:]) ** 2).sum())
+    return total
 
 
 def heading_cost(

@@ -104,7 +104,7 @@ def as_cones(cones: Any, min_cones: int = MIN_CONES) -> np.ndarray:
 #: LaneParams fields for which 0 is meaningful.
 _MAY_BE_ZERO = ("window_behind_m", "nvd_distance_weight", "nvd_lookahead_weight",
                 "contested_margin", "skipped_cone_m", "start_min_width_m", "start_behind_m",
-                "w_regularity")
+                "w_regularity", "w_width_roughness")
 
 
 @dataclass(frozen=True)
@@ -167,6 +167,15 @@ class LaneParams:
     12.63 -> 13.21, 3.63 -> 4.50, 8.42 -> 8.85 %, where real spacing changes from straight to
     corner; and CLC (its dive judge is ``lane_cost``) went from 1.36 to 2.79 % at R = 50 m,
     30 %. So it stays off."""
+    w_width_roughness: float = 0.2
+    """Weight of the width roughness (``rld.costs.width_roughness``, per m^2; ours) in CLC's
+    dive judge, beside RLD's objective within the dive reach (``clc.solver.dive_cost``); 0
+    turns it off. Measured 2026-12-03 on the six shared tracks, every pose, tolerant critical
+    %, seeds 0-2 pooled, 0 -> 0.2: R = 30 m 0.29 / 1.48 / 4.63 / 18.00 -> 0.22 / 1.07 / 4.22 /
+    16.79 at 0 / 10 / 30 / 50 % false positives, R = 50 m 0.07 / 0.12 / 1.36 / 8.32 -> 0.07 /
+    0.12 / 1.33 / 8.13; on seeds 3-4 (not used to choose it) R = 30 m 10 / 30 % 1.53 / 6.55 ->
+    1.35 / 6.48 and R = 50 m 30 % 1.60 -> 1.09. 0.1 / 0.3 / 0.5 / 2.0 gave 1.41 / 1.16 / 1.14
+    / 1.09 at R = 30 m 10 % and 1.33 / 1.46 / 1.48 / 2.38 at R = 50 m 30 % (docs/clc.md)."""
     regularity_tolerance: float = 2.0
     """rho_t of the regularity cost: the ratio of consecutive edge lengths that costs 1 (> 1).
     On the shared tracks 90 % of consecutive true edges are within a ratio of 1.49, 99 % of

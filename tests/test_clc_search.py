@@ -10,6 +10,7 @@ feasible pair.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -610,10 +611,10 @@ def test_contested_dives_take_the_runner_up_and_the_ranker_decides():
     off = LaneSolver("clc", LaneParams(max_iterations=30, contested_margin=0.0),
                      ranker="rld_cost").solve(pts, POSE)
     assert off.stats["dives"] == 0 and off.left.tolist() == lane.left.tolist()
-    # The finalists are the ranker's pick of the first search and of each dive; RLD's objective
-    # decides among them, whatever the ranker.
+    # The finalists are the ranker's pick of the first search and of each dive; the dive
+    # judge (RLD's objective and the width roughness) decides among them, whatever the ranker.
     from clc.ranker import get_ranker
-    from clc.solver import DIVE_REACH_M
+    from clc.solver import dive_cost
     for name in ("longest", "learned"):
         ranker = get_ranker(name)
         first = enumerate_candidates(pts, POSE, params)
@@ -623,9 +624,9 @@ def test_contested_dives_take_the_runner_up_and_the_ranker_decides():
                                              40 + 12):
             picks.append(_pick(ranker, pts, params, res))
         # The judge counts each lane within the dive reach of the car.
-        costs = [lane_cost(pts, a, b, POSE, params, radius_m=DIVE_REACH_M) for a, b in picks]
+        costs = [dive_cost(pts, POSE, params, a, b) for a, b in picks]
         got = LaneSolver("clc", params, ranker=name).solve(pts, POSE)
-        here = lane_cost(pts, got.left, got.right, POSE, params, radius_m=DIVE_REACH_M)
+        here = dive_cost(pts, POSE, params, got.left, got.right)
         # The first round runs exactly these dives; a later round (when a dive's lane won)
         # only adds dives and never raises the cost.
         assert got.stats["dives"] >= len(picks) - 1 >= 1
@@ -640,12 +641,10 @@ def _no_cheaper_dive(points, pose, params, lane):
     prefers (when the rounds ended before their limit), neither a close call's nor, for a
     short lane, any choice's with both boundaries rebuilt."""
     from clc.ranker import get_ranker
-    from clc.solver import DIVE_ITERATIONS, DIVE_REACH_M, SHORT_LANE_M, _short
-    from rld.costs import lane_cost
+    from clc.solver import DIVE_ITERATIONS, DIVE_REACH_M, SHORT_LANE_M, _short, dive_cost
     first = enumerate_candidates(points, pose, params)
     ranker = get_ranker("learned")
-    here = lane_cost(points, lane.left, lane.right, pose, params, closed=lane.closed,
-                     radius_m=DIVE_REACH_M)
+    here = dive_cost(points, pose, params, lane.left, lane.right, lane.closed)
     budget = DIVE_ITERATIONS + lane.left.size + lane.right.size
     dives = contested_dives(points, pose, params, first.graph, first.start, lane.left,
                             lane.right, params.contested_margin, DIVE_REACH_M, budget)
@@ -657,8 +656,7 @@ def _no_cheaper_dive(points, pose, params, lane):
             a, b, c = dive.candidates[int(np.argmax(ranker.score(points, pose, params,
                                                                  dive.candidates,
                                                                  dive.features)))]
-            assert lane_cost(points, a, b, pose, params, closed=c,
-                             radius_m=DIVE_REACH_M) >= here - 1e-9
+            assert dive_cost(points, pose, params, a, b, c) >= here - 1e-9
 
 
 def test_dive_rounds_end_where_no_dive_is_cheaper():
@@ -813,6 +811,30 @@ def test_dive_judge_counts_within_the_reach_track4(dataset_dir, monkeypatch):
         lane_cost(f.cones, lane.left, lane.right, f.pose, PARAMS)
     assert lane_cost(f.cones, lane.left, lane.right, f.pose, PARAMS, radius_m=reach) < \
         lane_cost(f.cones, skip.left, skip.right, f.pose, PARAMS, radius_m=reach)
+
+
+def test_dive_judge_width_roughness_track3(dataset_dir):
+    """Track 3 at R = 30 m, no false positives, pose 5: judged by RLD's objective alone, the
+    dives settle on a left boundary that skips the true cone 6 (cheaper by 0.04); the skip
+    jogs the lane's width, and with the width roughness (``w_width_roughness``, the default)
+    the judge keeps the cone and the lane no longer diverges before 20 m."""
+    from clc.solver import dive_cost
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    f = simulate_lap(load_dataset_track(dataset_dir, 3), range_m=30.0, fp_rate=0.0,
+                     seed=0).frame(5)
+    assert PARAMS.w_width_roughness > 0
+    off_params = dataclasses.replace(PARAMS, w_width_roughness=0.0)
+    on = LaneSolver("clc", PARAMS).solve(f.cones, f.pose)
+    off = LaneSolver("clc", off_params).solve(f.cones, f.pose)
+    assert not score_lane(f, on.left, on.right, on.ok, on.closed).critical_tolerant
+    assert score_lane(f, off.left, off.right, off.ok, off.closed).critical_tolerant
+    assert 6 in on.left.tolist() and 6 not in off.left.tolist()
+    assert dive_cost(f.cones, f.pose, off_params, off.left, off.right, off.closed) < \
+        dive_cost(f.cones, f.pose, off_params, on.left, on.right, on.closed)
+    assert dive_cost(f.cones, f.pose, PARAMS, on.left, on.right, on.closed) < \
+        dive_cost(f.cones, f.pose, PARAMS, off.left, off.right, off.closed)
 
 
 def test_path_ahead_hand_worked():

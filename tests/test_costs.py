@@ -155,3 +155,59 @@ def test_regularity_cost_hand_worked():
     assert d_rect == pytest.approx(3.0 * 4)  # every cone joins a 2 m and a 4 m edge
     with pytest.raises(ValueError, match="regularity_tolerance"):
         LaneParams(regularity_tolerance=1.0)
+
+
+def _dense_distance(points, line, samples=20001):
+    """Distance from each point to a polyline, by dense sampling (independent of rld.geometry)."""
+    seg = np.linspace(0.0, 1.0, samples)[:, None]
+    dense = np.vstack([a + seg * (b - a) for a, b in zip(line[:-1], line[1:], strict=True)])
+    return np.array([np.hypot(*(dense - p).T).min() for p in points])
+
+
+def test_width_roughness_hand_worked():
+    """Sum over both boundaries of the squared second differences of the cones' distances to
+    the other boundary: 0 for parallel ones; one cone moved 1 m out of a 4 m lane."""
+    xs = np.array([0.0, 4.0, 8.0, 12.0])
+    left = np.column_stack([xs, np.full(4, 2.0)])
+    right = np.column_stack([xs, np.full(4, -2.0)])
+    assert costs.width_roughness(left, right) == pytest.approx(0.0)
+    # A left boundary of two cones adds nothing itself; the right cones past its end measure
+    # the diagonals to (4, 2): 4, 4, sqrt(32), sqrt(80) -> 1.657^2 + 1.630^2.
+    assert costs.width_roughness(left[:2], right) == pytest.approx(
+        (8 - 2 * 4 - 4 + math.sqrt(32)) ** 2 + (4 - 2 * math.sqrt(32) + math.sqrt(80)) ** 2)
+    bumped = left.copy()
+    bumped[1, 1] = 3.0
+    # Left cones to the right line: 4, 5, 4, 4 -> second differences -2, 1 -> 4 + 1.
+    own = 5.0
+    # Right cones to the left line: 4, 4.851, 4, 4 (worked by hand) -> -1.702, 0.851.
+    w = _dense_distance(right, bumped)
+    assert w == pytest.approx([4.0, 4.851, 4.0, 4.0], abs=1e-3)
+    other = float(((w[:-2] - 2 * w[1:-1] + w[2:]) ** 2).sum())
+    assert costs.width_roughness(bumped, right) == pytest.approx(own + other, abs=1e-3)
+    # The order of the sides does not matter; a rigid motion changes nothing.
+    assert costs.width_roughness(right, bumped) == pytest.approx(own + other, abs=1e-3)
+    c, s = math.cos(0.7), math.sin(0.7)
+    rot = np.array([[c, -s], [s, c]])
+    assert costs.width_roughness(bumped @ rot.T + 5.0, right @ rot.T + 5.0) == \
+        pytest.approx(own + other, abs=1e-3)
+
+
+@given(st.floats(-math.pi, math.pi), st.floats(2.0, 5.0), st.floats(3.0, 5.0),
+       st.integers(3, 9), st.integers(1, 7), st.floats(-1.5, 1.5))
+def test_width_roughness_of_a_jog(angle, spacing, width, n, at, offset):
+    """Parallel boundaries, cones abreast, under any rotation: no roughness. One interior
+    cone moved
+    sideways by d adds at least its own side's second differences, -2d at it and d at each
+    neighbour that is interior too (the other side's terms are >= 0)."""
+    xs = np.arange(n) * spacing
+    left = np.column_stack([xs, np.full(n, width / 2)])
+    right = np.column_stack([xs, np.full(n, -width / 2)])
+    c, s_ = math.cos(angle), math.sin(angle)
+    rot = np.array([[c, -s_], [s_, c]])
+    assert costs.width_roughness(left @ rot.T, right @ rot.T) == pytest.approx(0.0, abs=1e-9)
+    if 1 <= at <= n - 2:
+        jog = left.copy()
+        jog[at, 1] += offset
+        got = costs.width_roughness(jog @ rot.T, right @ rot.T)
+        own = (4 + (at >= 2) + (at <= n - 3)) * offset**2
+        assert got >= own - 1e-9
