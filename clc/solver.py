@@ -45,11 +45,12 @@ from clc.search import (
     merge_results,
     path_ahead,
 )
+from rld import geometry as geo
 from rld.constraints import lane_is_feasible, starting_vertex_pairs
 from rld.costs import lane_cost, width_roughness, within_radius
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
-__all__ = ["ClcModel", "MATCH_TOLERANCE_M", "dive_cost"]
+__all__ = ["ClcModel", "MATCH_TOLERANCE_M", "dive_cost", "jog_positions"]
 
 log = logging.getLogger(__name__)
 
@@ -62,6 +63,12 @@ DIVE_ITERATIONS = 40
 DIVE_REACH_M = 25.0
 #: Rounds of dives: a dive whose lane wins has its own close calls revisited.
 DIVE_ROUNDS = 3
+#: Jog dives (``jog_positions``): in each round, the ``JOG_DIVES`` largest width jogs of the
+#: winner within the dive reach, where the second difference of its matching-line lengths
+#: exceeds ``JOG_THRESHOLD_M``, are revisited like close calls; 0 dives turns them off
+#: (docs/clc.md, "Jog dives").
+JOG_THRESHOLD_M = 1.5
+JOG_DIVES = 2
 #: After the dives, drop the outward detours of the winner that RLD's objective prefers
 #: without (``clc.search.drop_detours``; ``lane.stats["dropped"]``).
 DROP_DETOURS = True
@@ -102,6 +109,47 @@ def dive_cost(points: np.ndarray, pose: Pose, params: LaneParams, left: np.ndarr
         b = within_radius(points, right, pose, DIVE_REACH_M)
         cost += params.w_width_roughness * width_roughness(points[a], points[b])
     return cost
+
+
+def jog_positions(points: np.ndarray, pose: Pose, left: np.ndarray, right: np.ndarray,
+                  threshold_m: float, reach_m: float) -> list[tuple[int, int]]:
+    """Where a lane's width jogs: the (side, j) of every cone ``left[j]`` (side 0) or
+    ``right[j]`` (side 1) within ``reach_m`` of the car (``within_radius``) whose matching
+    line to the other boundary (CLC eq. 9, ``point_polyline_distance``) differs from the mean of
+    its two neighbours' by more than half of ``threshold_m``: the absolute second difference of
+    the lengths exceeds ``threshold_m`` (metres). Largest jog first. A false positive 0.6-1.5 m
+    beside the line that the lane takes is such a cone (``ClcModel._dive_rounds`` revisits
+    it); a real lane's width changes smoothly."""
+    out = []
+    for side, path, other in ((0, left, right), (1, right, left)):
+        idx = within_radius(points, path, pose, reach_m)
+        if idx.size < 3 or np.asarray(other).size < 2:
+            continue
+        w = geo.point_polyline_distance(points[idx], points[other])
+        d2 = np.abs(w[:-2] - 2.0 * w[1:-1] + w[2:])
+        out += [(-float(d2[k]), side, int(k) + 1) for k in np.flatnonzero(d2 > threshold_m)]
+    return [(side, j) for _, side, j in sorted(out)]
+
+
+def _jog_dives(points, pose, params, res, left, right, budget, done):
+    """Dives at the ``JOG_DIVES`` largest width jogs of the lane (``jog_positions``), as
+    ``contested_dives`` does at a close call: follow the lane up to the cone, forbid it there,
+    search on. Close calls already revisited (``done``, the same keys) are skipped."""
+    out = []
+    for side, j in jog_positions(points, pose, left, right, JOG_THRESHOLD_M, DIVE_REACH_M):
+        if len(out) >= JOG_DIVES:
+            break
+        path, other = (left, right) if side == 0 else (right, left)
+        key = (side, path[:j + 1].tobytes(), other.tobytes(), False)
+        if key in done:
+            continue
+        done.add(key)
+        guide = (left[:j], right) if side == 0 else (left, right[:j])
+        cone = int(path[j])
+        out.append(enumerate_candidates(points, pose, params, max_iterations=budget,
+                                        graph=res.graph, start=res.start, guide=guide,
+                                        forbid=(cone, -1) if side == 0 else (-1, cone)))
+    return out
 
 
 def _depth(res) -> int:
@@ -236,12 +284,15 @@ class ClcModel:
         within the reach revisited in that round, each of these dives rebuilding the other
         boundary from beside the choice (``contested_dives(..., cut_other=True)``).
         No dive starts after ``deadline`` (``time.perf_counter()``).
+        Each round also revisits the winner's largest width jogs (``_jog_dives``, at most
+        JOG_DIVES): a false positive beside the line that the search took with a clear decider
+        margin is no close call, but it jogs the width.
         Returns the final (left, right, closed, score), the dives run, their iterations, the
         rounds run (a round that changes nothing ends them), the rounds whose winner was
-        short, and whether the deadline stopped them."""
+        short, the jog dives among the dives, and whether the deadline stopped them."""
         p = self.params
         done: set[tuple] = set()
-        n_dives = iterations = rounds = short_rounds = 0
+        n_dives = iterations = rounds = short_rounds = n_jogs = 0
         cost = None  # the winner's, computed once a dive has a lane to compare
         # Whether the map reaches beyond SHORT_LANE_M (_short): found at most once per call,
         # when a winner is short (it does not depend on the winner; 9 us on a 409-cone map).
@@ -265,6 +316,10 @@ class ClcModel:
                                          np.inf, DIVE_REACH_M, budget, skip=done,
                                          cut_other=True, deadline=deadline,
                                          stopped=stopped)
+            if JOG_DIVES > 0:
+                jogs = _jog_dives(points, pose, p, res, left, right, budget, done)
+                n_jogs += len(jogs)
+                dives += jogs
             best, best_cost = None, cost
             for dive in dives:
                 n_dives += 1
@@ -283,7 +338,8 @@ class ClcModel:
             if best is None:
                 break
             winner, cost = best, best_cost
-        return (*winner, n_dives, iterations, rounds, short_rounds, cut or bool(stopped))
+        return (*winner, n_dives, iterations, rounds, short_rounds, n_jogs,
+                cut or bool(stopped))
 
     def solve(self, points: np.ndarray, pose: Pose, colors=None, time_limit_s=None,
               confidence=None) -> Lane:
@@ -354,14 +410,14 @@ class ClcModel:
         left, right, closed = res.candidates[best]
         left, right = left.copy(), right.copy()
         score = float(scores[best])
-        n_dives = rounds = short_rounds = 0
+        n_dives = rounds = short_rounds = n_jogs = 0
         if not res.complete and self.params.contested_margin > 0:
-            (left, right, closed, score, n_dives, it, rounds, short_rounds,
+            (left, right, closed, score, n_dives, it, rounds, short_rounds, n_jogs,
              cut) = self._dive_rounds(points, pose, res, (left, right, closed, score), deadline)
             stats["cut_short"] |= cut
             iterations += it
         stats.update(dives=n_dives, dive_rounds=rounds, short_lane_rounds=short_rounds,
-                     iterations=iterations)
+                     jog_dives=n_jogs, iterations=iterations)
         stats["dropped"] = 0
         if not res.complete and not closed and DROP_DETOURS:
             left, right, stats["dropped"] = drop_detours(points, pose, self.params, res.graph,

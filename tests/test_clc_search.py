@@ -718,19 +718,25 @@ def test_drop_detours_mends_track6(dataset_dir, monkeypatch):
     """Track 6 at R = 30 m, 10 % false positives, pose 35: the right boundary detours through
     a false positive 1.1 m off the line between two true cones 12 m ahead (the decider ranked
     it first, no close call flagged it). Dropping it lowers RLD's objective by 2.55 and the
-    lane no longer diverges before 20 m (tolerant rule)."""
+    lane no longer diverges before 20 m (tolerant rule). The jog dives (2026-12-03) are off
+    here, to test the drop alone; the defaults mend it too."""
     import clc.solver
     from rld.metrics import score_lane
     from rld.simulation import simulate_lap
     from rld.tracks import load_dataset_track
     lap = simulate_lap(load_dataset_track(dataset_dir, 6), range_m=30.0, fp_rate=0.1, seed=0)
     f = lap.frame(35)
+    jogs = clc.solver.JOG_DIVES
+    monkeypatch.setattr(clc.solver, "JOG_DIVES", 0)
     for flag, critical in ((False, True), (True, False)):
         monkeypatch.setattr(clc.solver, "DROP_DETOURS", flag)
         lane = LaneSolver("clc").solve(f.cones, f.pose)
         s = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
         assert s.critical_tolerant is critical
         assert lane.stats.get("dropped", 0) == int(flag)
+    monkeypatch.setattr(clc.solver, "JOG_DIVES", jogs)
+    lane = LaneSolver("clc").solve(f.cones, f.pose)
+    assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
 
 
 def test_shallow_start_pair_falls_back_to_a_deeper_one(dataset_dir, monkeypatch):
@@ -835,6 +841,50 @@ def test_dive_judge_width_roughness_track3(dataset_dir):
         dive_cost(f.cones, f.pose, off_params, on.left, on.right, on.closed)
     assert dive_cost(f.cones, f.pose, PARAMS, on.left, on.right, on.closed) < \
         dive_cost(f.cones, f.pose, PARAMS, off.left, off.right, off.closed)
+
+
+def test_jog_positions_hand_worked():
+    """A straight 4 m lane, cones every 4 m: no jog. The left cone at x = 8 moved 1.5 m out:
+    its matching line is 5.5 m between two of 4 m (second difference -3), its neighbours'
+    +1.5; the right cone abreast of it now sees the bent left boundary 5.15 m away (nearest at
+    the moved cone: -2.3, its neighbours +1.15). Largest first; a threshold of 2 m keeps the
+    two middle ones; the reach cuts the cones beyond it off."""
+    from clc.solver import jog_positions
+    xs = np.arange(6) * 4.0
+    left = np.column_stack([xs, np.full(6, 2.0)])
+    right = np.column_stack([xs, np.full(6, -2.0)])
+    pts = np.vstack([left, right])
+    L, R = np.arange(6), np.arange(6, 12)
+    car = Pose(0.0, 0.0, 0.0)
+    assert jog_positions(pts, car, L, R, 1.0, 25.0) == []
+    pts[2, 1] = 3.5
+    got = jog_positions(pts, car, L, R, 1.0, 25.0)
+    assert got[:2] == [(0, 2), (1, 2)]
+    assert set(got) == {(side, j) for side in (0, 1) for j in (1, 2, 3)}
+    assert jog_positions(pts, car, L, R, 2.0, 25.0) == [(0, 2), (1, 2)]
+    # Within 5 m: each boundary up to and with its first cone beyond (x = 8), so only the
+    # cones at x = 4 are interior; their second differences are 1.5 and 1.15.
+    assert jog_positions(pts, car, L, R, 1.0, 5.0) == [(0, 1), (1, 1)]
+
+
+def test_jog_dive_takes_the_true_cone_track4(dataset_dir, monkeypatch):
+    """Track 4 at R = 30 m, 30 % false positives, seed 1, pose 250: the search takes cones
+    beside both boundaries' lines 10-12 m ahead with clear decider margins, so no close call
+    is revisited. The width jogs there; the jog dives revisit those cones, and the lane no
+    longer diverges before 20 m. Without them (JOG_DIVES = 0) it does."""
+    import clc.solver
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    f = simulate_lap(load_dataset_track(dataset_dir, 4), range_m=30.0, fp_rate=0.3,
+                     seed=1).frame(250)
+    lane = LaneSolver("clc").solve(f.cones, f.pose)
+    assert lane.stats["jog_dives"] >= 1
+    assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
+    monkeypatch.setattr(clc.solver, "JOG_DIVES", 0)
+    off = LaneSolver("clc").solve(f.cones, f.pose)
+    assert off.stats["jog_dives"] == 0
+    assert score_lane(f, off.left, off.right, off.ok, off.closed).critical_tolerant
 
 
 def test_path_ahead_hand_worked():
