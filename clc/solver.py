@@ -131,13 +131,20 @@ def jog_positions(points: np.ndarray, pose: Pose, left: np.ndarray, right: np.nd
     return [(side, j) for _, side, j in sorted(out)]
 
 
-def _jog_dives(points, pose, params, res, left, right, budget, done):
+def _jog_dives(points, pose, params, res, left, right, budget, done, deadline=math.inf,
+               stopped=None):
     """Dives at the ``JOG_DIVES`` largest width jogs of the lane (``jog_positions``), as
     ``contested_dives`` does at a close call: follow the lane up to the cone, forbid it there,
-    search on. Close calls already revisited (``done``, the same keys) are skipped."""
+    search on (without ``contested_dives``' second, banning search). Close calls already
+    revisited (``done``, the same keys) are skipped. No dive starts after ``deadline``
+    (``time.perf_counter()``); then ``True`` is appended to ``stopped``."""
     out = []
     for side, j in jog_positions(points, pose, left, right, JOG_THRESHOLD_M, DIVE_REACH_M):
         if len(out) >= JOG_DIVES:
+            break
+        if time.perf_counter() > deadline:
+            if stopped is not None:
+                stopped.append(True)
             break
         path, other = (left, right) if side == 0 else (right, left)
         key = (side, path[:j + 1].tobytes(), other.tobytes(), False)
@@ -317,7 +324,8 @@ class ClcModel:
                                          cut_other=True, deadline=deadline,
                                          stopped=stopped)
             if JOG_DIVES > 0:
-                jogs = _jog_dives(points, pose, p, res, left, right, budget, done)
+                jogs = _jog_dives(points, pose, p, res, left, right, budget, done, deadline,
+                                  stopped)
                 n_jogs += len(jogs)
                 dives += jogs
             best, best_cost = None, cost

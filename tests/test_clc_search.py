@@ -865,6 +865,14 @@ def test_jog_positions_hand_worked():
     # Within 5 m: each boundary up to and with its first cone beyond (x = 8), so only the
     # cones at x = 4 are interior; their second differences are 1.5 and 1.15.
     assert jog_positions(pts, car, L, R, 1.0, 5.0) == [(0, 1), (1, 1)]
+    # The dives at those jogs: at most JOG_DIVES of them, and none past the deadline.
+    from clc.solver import JOG_DIVES, _jog_dives
+    res = enumerate_candidates(pts, car, PARAMS)
+    assert len(_jog_dives(pts, car, PARAMS, res, L, R, 60, set())) == min(JOG_DIVES, 6)
+    stopped = []
+    assert _jog_dives(pts, car, PARAMS, res, L, R, 60, set(), deadline=0.0,
+                      stopped=stopped) == []
+    assert stopped == [True]
 
 
 def test_jog_dive_takes_the_true_cone_track4(dataset_dir, monkeypatch):
