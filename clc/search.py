@@ -289,16 +289,10 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
                 if key in skip:
                     continue
                 skip.add(key)
-            kept = other
-            if cut_other and other.size > 1:
-                d = points[other] - points[path[j - 1]]
-                kept = other[: int(np.argmin(np.hypot(d[:, 0], d[:, 1]))) + 1]
-            guide = (left[:j], kept) if side == 0 else (kept, right[:j])
-            cone = int(path[j])
-            res = enumerate_candidates(points, pose, params, max_iterations=iterations,
-                                       graph=graph, start=start, guide=guide,
-                                       forbid=(cone, -1) if side == 0 else (-1, cone))
+            res, guide = dive_at(points, pose, params, graph, start, left, right, side, int(j),
+                                 iterations, cut_other)
             out.append(res)
+            cone = int(path[j])
             lf, _, rf, _, _ = res.candidates.flat()
             if np.any(lf == cone) or np.any(rf == cone):
                 out.append(enumerate_candidates(points, pose, params,
@@ -306,6 +300,27 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
                                                 start=start, guide=guide,
                                                 banned=path[j:j + 1]))
     return out
+
+
+def dive_at(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
+            start: tuple[int, int], left: np.ndarray, right: np.ndarray, side: int, j: int,
+            iterations: int, cut_other: bool = False) -> tuple[SearchResult, tuple]:
+    """One dive (``contested_dives``; ``clc.solver``'s jog dives): a search of ``iterations``
+    that follows the lane up to position ``j`` of boundary ``side`` (0 left, 1 right) and may
+    not take that boundary's cone there, so it continues on its own. ``cut_other``: the guide
+    keeps of the other boundary only its cones up to and with the one nearest the cone before
+    (see ``contested_dives``). Returns the search and the guide it followed."""
+    path, other = (left, right) if side == 0 else (right, left)
+    kept = other
+    if cut_other and other.size > 1:
+        d = points[other] - points[path[j - 1]]
+        kept = other[: int(np.argmin(np.hypot(d[:, 0], d[:, 1]))) + 1]
+    guide = (left[:j], kept) if side == 0 else (kept, right[:j])
+    cone = int(path[j])
+    res = enumerate_candidates(points, pose, params, max_iterations=iterations, graph=graph,
+                               start=start, guide=guide,
+                               forbid=(cone, -1) if side == 0 else (-1, cone))
+    return res, guide
 
 
 def merge_results(a: SearchResult, b: SearchResult) -> SearchResult:

@@ -39,15 +39,15 @@ from clc.search import (
     GRAPHS,
     closable,
     contested_dives,
+    dive_at,
     drop_detours,
     drop_ring_join,
     enumerate_candidates,
     merge_results,
     path_ahead,
 )
-from rld import geometry as geo
 from rld.constraints import lane_is_feasible, starting_vertex_pairs
-from rld.costs import lane_cost, width_roughness, within_radius
+from rld.costs import lane_cost, width_roughness, width_second_differences, within_radius
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
 __all__ = ["ClcModel", "MATCH_TOLERANCE_M", "dive_cost", "jog_positions"]
@@ -123,10 +123,7 @@ def jog_positions(points: np.ndarray, pose: Pose, left: np.ndarray, right: np.nd
     out = []
     for side, path, other in ((0, left, right), (1, right, left)):
         idx = within_radius(points, path, pose, reach_m)
-        if idx.size < 3 or np.asarray(other).size < 2:
-            continue
-        w = geo.point_polyline_distance(points[idx], points[other])
-        d2 = np.abs(w[:-2] - 2.0 * w[1:-1] + w[2:])
+        d2 = np.abs(width_second_differences(points[idx], points[other]))
         out += [(-float(d2[k]), side, int(k) + 1) for k in np.flatnonzero(d2 > threshold_m)]
     return [(side, j) for _, side, j in sorted(out)]
 
@@ -151,11 +148,8 @@ def _jog_dives(points, pose, params, res, left, right, budget, done, deadline=ma
         if key in done:
             continue
         done.add(key)
-        guide = (left[:j], right) if side == 0 else (left, right[:j])
-        cone = int(path[j])
-        out.append(enumerate_candidates(points, pose, params, max_iterations=budget,
-                                        graph=res.graph, start=res.start, guide=guide,
-                                        forbid=(cone, -1) if side == 0 else (-1, cone)))
+        out.append(dive_at(points, pose, params, res.graph, res.start, left, right, side, j,
+                           budget)[0])
     return out
 
 

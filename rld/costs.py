@@ -22,6 +22,7 @@ __all__ = [
     "heading_cost",
     "regularity_cost",
     "width_roughness",
+    "width_second_differences",
     "high_cost_mask",
     "edge_objective",
     "lane_cost",
@@ -88,15 +89,22 @@ def width_roughness(left_xy: np.ndarray, right_xy: np.ndarray) -> float:
     CLC's dive judge (``clc.solver.dive_cost``) adds ``LaneParams.w_width_roughness`` times it
     to RLD's objective: a false positive 0.6-1.5 m beside a true cone makes a line as smooth
     as the true one, but jogs the width."""
-    L = np.asarray(left_xy, dtype=np.float64).reshape(-1, 2)
-    R = np.asarray(right_xy, dtype=np.float64).reshape(-1, 2)
-    total = 0.0
-    for Q, T in ((L, R), (R, L)):
-        if Q.shape[0] < 3 or T.shape[0] < 2:
-            continue
-        w = geo.point_polyline_distance(Q, T)
-        total += float(((w[:-2] - 2.0 * w[1:-1] + w[2:]) ** 2).sum())
-    return total
+    return float(sum((width_second_differences(Q, T) ** 2).sum()
+                     for Q, T in ((left_xy, right_xy), (right_xy, left_xy))))
+
+
+def width_second_differences(query_xy: np.ndarray, target_xy: np.ndarray) -> np.ndarray:
+    """The second differences (metres) of the matching-line lengths of the boundary
+    ``query_xy`` to the boundary ``target_xy`` (each cone's distance to the target polyline,
+    CLC eq. 9), in order: entry k belongs to query cone k + 1. Empty for fewer than 3 query
+    cones or fewer than 2 target cones. ``width_roughness`` sums their squares;
+    ``clc.solver.jog_positions`` finds the large ones."""
+    Q = np.asarray(query_xy, dtype=np.float64).reshape(-1, 2)
+    T = np.asarray(target_xy, dtype=np.float64).reshape(-1, 2)
+    if Q.shape[0] < 3 or T.shape[0] < 2:
+        return np.zeros(0)
+    w = geo.point_polyline_distance(Q, T)
+    return w[:-2] - 2.0 * w[1:-1] + w[2:]
 
 
 def heading_cost(
