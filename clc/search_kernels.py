@@ -31,8 +31,16 @@ searches instead of 1 %, so it is not used.
 
 Next-vertex decider, deviation: |turn| + ``dist_weight`` * distance instead of the turn alone
 (eq. 3), plus ``lookahead`` times the best such score of the step after the option; see
-``LaneParams.nvd_distance_weight`` and ``nvd_lookahead_weight``. No memoization (eq. 3's
-cache): the decider scans the few neighbours of one cone, cheaper than a cache lookup here.
+``LaneParams.nvd_distance_weight`` and ``nvd_lookahead_weight``. Memoized per frame of the
+search (section V-A uses memoization too): a frame's option scores are computed once, when
+the frame is made, and reused each time the search comes back to it; its paths and the
+vertices in them are then the same, and its tried options only grow. (Before 2026-12-03 the
+decider scored both ends afresh at every step.)
+
+Speed: the helpers that allocate nothing are compiled without numba's reference counting
+(``LEAF``); with it, a call passing arrays paid atomic count updates on entry and exit, half
+the time of a search. Both changes keep every candidate, its order and the iteration count
+(tested against the unmemoized search, ``memo=False``).
 """
 
 from __future__ import annotations
@@ -41,6 +49,7 @@ import math
 
 import numpy as np
 from numba import njit
+from numba.core.options import DefaultOptions
 
 from rld.geometry_kernels import (
     grow_2d,
@@ -55,6 +64,13 @@ from rld.geometry_kernels import (
     turn_angle,
 )
 
+#: Options of the search's helpers that allocate nothing: compiled without numba's reference
+#: counting (``_nrt=False``). With it, every call that passes arrays adjusts their reference
+#: counts on entry and exit, atomic operations that took half the search's time (perf,
+#: 2026-12-03: 4.0 -> 2.2 us per iteration without them, the same candidates). ``_nrt`` is
+#: numba's own option (``numba.core.options``); a numba without it gets the plain options.
+LEAF = {"cache": True, "_nrt": False} if hasattr(DefaultOptions, "_nrt") else {"cache": True}
+
 #: Margin of the culling tests, metres: far above rounding, far below any cone distance.
 CULL_MARGIN = 1e-7
 #: Segments per block of the ring check's two-level bounding boxes.
@@ -62,7 +78,7 @@ BLOCK = 8
 N_FEATURES = 8
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _angle_between(ux, uy, vx, vy):
     """Unsigned angle between vectors u and v, radians in [0, pi]; pi if either is zero."""
     if (ux == 0.0 and uy == 0.0) or (vx == 0.0 and vy == 0.0):
@@ -70,7 +86,7 @@ def _angle_between(ux, uy, vx, vy):
     return abs(math.atan2(ux * vy - uy * vx, ux * vx + uy * vy))
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _option_turn(pts, path, n, v, hx, hy):
     """|turn| from the path's last segment (or the car heading for a single vertex) to the
     segment path[n-1] -> v."""
@@ -81,7 +97,7 @@ def _option_turn(pts, path, n, v, hx, hy):
     return _angle_between(hx, hy, pts[v, 0] - pts[c, 0], pts[v, 1] - pts[c, 1])
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _onward(pts, adj_ptr, adj_idx, c, v, in_path, max_turn, dist_weight, dead_end):
     """The look-ahead of the next-vertex decider: the best score |turn| + dist_weight *
     distance of a step from ``v`` onward (after c -> v) to a cone in no path and within the
@@ -100,7 +116,7 @@ def _onward(pts, adj_ptr, adj_idx, c, v, in_path, max_turn, dist_weight, dead_en
     return dead_end if best == np.inf else best
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _option_score(pts, adj_ptr, adj_idx, path, n, v, in_path, max_turn, hx, hy, dist_weight,
                   lookahead, dead_end):
     """The next-vertex decider's score of extending ``path[:n]`` by ``v`` (CLC eq. 3 with a
@@ -123,33 +139,48 @@ def _option_score(pts, adj_ptr, adj_idx, path, n, v, in_path, max_turn, hx, hy, 
     return score
 
 
-@njit(cache=True)
-def _choose_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx, hy,
-                   dist_weight, lookahead, dead_end, guide, guided, forbid):
-    """The next-vertex decider: among the neighbours of the path's end that are untried at
-    this frame, in no path and within the turn limit (C_seg), the one with the lowest
-    ``_option_score``. The warm-start guide's next vertex wins when the path is still a
-    prefix of the guide; when the path is the whole guide, ``forbid`` (a vertex, or -1) is
-    not an option. Returns (slot, vertex) or (-1, -1)."""
+@njit(**LEAF)
+def _score_options(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx, hy,
+                   dist_weight, lookahead, dead_end, guide, guided, forbid, out):
+    """The next-vertex decider's scores (``_option_score``) of every neighbour of the path's
+    end, into ``out[k]`` for neighbour slot k: ``inf`` for an option that is tried, in a path,
+    beyond the turn limit (C_seg) or ``forbid`` (a vertex, or -1; only when the path is the
+    whole guide). A frame's scores hold for as long as the frame lives: its paths and the
+    vertices in them are the same whenever the search is back at it, and its tried options
+    only grow (they are skipped in ``_pick_option``), so ``enumerate_pairs`` scores each frame
+    once (the decider memoized, as the paper's implementation is, section V-A)."""
     c = path[n - 1]
     s0 = adj_ptr[c]
-    best = -1
-    best_v = -1
-    best_score = np.inf
+    skip = forbid if guided and n == guide.shape[0] else -1
+    for k in range(adj_ptr[c + 1] - s0):
+        v = adj_idx[s0 + k]
+        if tried[k] or in_path[v] or v == skip:
+            out[k] = np.inf
+        else:
+            out[k] = _option_score(pts, adj_ptr, adj_idx, path, n, v, in_path, max_turn, hx,
+                                   hy, dist_weight, lookahead, dead_end)
+
+
+@njit(**LEAF)
+def _pick_option(adj_ptr, adj_idx, c, n, tried, scores, guide, guided):
+    """The next-vertex decider's choice among the untried neighbours of ``c`` (the path's end)
+    with a finite score (``_score_options``): the warm-start guide's next vertex when the path
+    is still a prefix of the guide and that vertex is an option, else the lowest score (ties:
+    the first in the graph's order). Returns (slot, vertex) or (-1, -1)."""
+    s0 = adj_ptr[c]
     want = -1
     if guided and n < guide.shape[0]:
         want = guide[n]
-    skip = forbid if guided and n == guide.shape[0] else -1
+    best = -1
+    best_v = -1
+    best_score = np.inf
     for k in range(adj_ptr[c + 1] - s0):
         if tried[k]:
             continue
-        v = adj_idx[s0 + k]
-        if in_path[v] or v == skip:
-            continue
-        score = _option_score(pts, adj_ptr, adj_idx, path, n, v, in_path, max_turn, hx, hy,
-                              dist_weight, lookahead, dead_end)
+        score = scores[k]
         if score == np.inf:
             continue
+        v = adj_idx[s0 + k]
         if v == want:
             return k, v
         if score < best_score:
@@ -157,6 +188,22 @@ def _choose_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx,
             best = k
             best_v = v
     return best, best_v
+
+
+@njit(cache=True)
+def _choose_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx, hy,
+                   dist_weight, lookahead, dead_end, guide, guided, forbid):
+    """The next-vertex decider without the memo (``_score_options`` then ``_pick_option``):
+    among the neighbours of the path's end that are untried at this frame, in no path and
+    within the turn limit (C_seg), the one with the lowest ``_option_score``. The warm-start
+    guide's next vertex wins when the path is still a prefix of the guide; when the path is
+    the whole guide, ``forbid`` (a vertex, or -1) is not an option. Returns (slot, vertex) or
+    (-1, -1)."""
+    c = path[n - 1]
+    scores = np.empty(adj_ptr[c + 1] - adj_ptr[c])
+    _score_options(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx, hy,
+                   dist_weight, lookahead, dead_end, guide, guided, forbid, scores)
+    return _pick_option(adj_ptr, adj_idx, c, n, tried, scores, guide, guided)
 
 
 @njit(cache=True)
@@ -328,7 +375,7 @@ def arc_behind(pts, path, px, py, hx, hy):
     return total
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _has_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn):
     """Whether the path's end has any untried, unused neighbour within the turn limit."""
     c = path[n - 1]
@@ -348,7 +395,7 @@ def _has_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn):
     return False
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _lrd_diff(pts, a_prev, a_end, b_prev, b_end, hx, hy):
     """| theta_b - theta_a | of CLC eq. 4 for boundaries ending a_prev -> a_end and
     b_prev -> b_end (a_prev or b_prev < 0: a single vertex, use the car heading)."""
@@ -371,7 +418,7 @@ def _lrd_diff(pts, a_prev, a_end, b_prev, b_end, hx, hy):
     return abs(tb - ta)
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _query_to_target(pts, qa, qb, target, nt, tmid, trad):
     """Distance from a query (vertex qa if qb < 0, else segment qa-qb) to the polyline of the
     first ``nt`` vertices of ``target`` (a single point if nt == 1), exactly as
@@ -412,7 +459,7 @@ def _query_to_target(pts, qa, qb, target, nt, tmid, trad):
     return best
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _lower_other(pts, other, no, omid, orad, wv_old, ws_old, wv_new, ws_new, sa, sb):
     """The other boundary's query values after this boundary gained segment sa-sb (its target
     had at least two vertices before, so the values are minima over target segments).
@@ -449,7 +496,7 @@ def _lower_other(pts, other, no, omid, orad, wv_old, ws_old, wv_new, ws_new, sa,
         ws_new[j] = v
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _recompute_all(pts, query, nq, target, nt, tmid, trad, wv, ws):
     for j in range(nq):
         wv[j] = _query_to_target(pts, query[j], -1, target, nt, tmid, trad)
@@ -457,14 +504,14 @@ def _recompute_all(pts, query, nq, target, nt, tmid, trad, wv, ws):
         ws[j] = _query_to_target(pts, query[j], query[j + 1], target, nt, tmid, trad)
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _boxes_apart(ax, ay, bx, by, cx, cy, dx, dy):
     m = CULL_MARGIN
     return (max(ax, bx) + m < min(cx, dx) or max(cx, dx) + m < min(ax, bx)
             or max(ay, by) + m < min(cy, dy) or max(cy, dy) + m < min(ay, by))
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _ring_edge(pts, L, nL, R, nR, e):
     """Endpoints (ax, ay, bx, by) of ring edge ``e`` of the lane ring L + reversed(R)."""
     k = nL + nR
@@ -484,13 +531,14 @@ def _ring_edge(pts, L, nL, R, nR, e):
     return pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1]
 
 
-@njit(cache=True)
-def _ring_pair_bad(pts, L, nL, R, nR, i, j):
-    """The test ``rld.geometry_kernels.polyline_self_intersects`` makes for ring edges i < j."""
-    k = nL + nR
-    ax, ay, bx, by = _ring_edge(pts, L, nL, R, nR, i)
-    cx, cy, dx, dy = _ring_edge(pts, L, nL, R, nR, j)
-    if j == i + 1 or (i == 0 and j == k - 1):
+@njit(**LEAF)
+def _pair_bad_xy(adjacent, ax, ay, bx, by, cx, cy, dx, dy):
+    """The test ``rld.geometry_kernels.polyline_self_intersects`` makes for ring edges i < j,
+    a-b (edge i) and c-d (edge j): adjacent edges fail when they come closest anywhere but at
+    their ends, others when they intersect. Scalars only: the ring check's inner loops pass no
+    arrays, whose reference counts numba would otherwise adjust at every call (atomic
+    operations, half the search's time before 2026-12-03)."""
+    if adjacent:
         _, end = segment_distance_end(ax, ay, bx, by, cx, cy, dx, dy)
         return not end
     if _boxes_apart(ax, ay, bx, by, cx, cy, dx, dy):
@@ -498,17 +546,12 @@ def _ring_pair_bad(pts, L, nL, R, nR, i, j):
     return segments_intersect(ax, ay, bx, by, cx, cy, dx, dy)
 
 
-@njit(cache=True)
-def _edge_zero(pts, L, nL, R, nR, e):
-    ax, ay, bx, by = _ring_edge(pts, L, nL, R, nR, e)
-    return ax == bx and ay == by
-
-
-@njit(cache=True)
-def _pair_check(pts, L, nL, R, nR, e, f, bx0, bx1, by0, by1, cx0, cx1, cy0, cy1):
-    """Ring edges e (box bx0..by1) and f (box cx0..cy1) fail the pair test of
-    ``polyline_self_intersects``; disjoint boxes of non-adjacent edges cannot touch."""
-    k = nL + nR
+@njit(**LEAF)
+def _pair_check_xy(k, e, f, ex0, ey0, ex1, ey1, fx0, fy0, fx1, fy1, bx0, bx1, by0, by1,
+                   cx0, cx1, cy0, cy1):
+    """Ring edges e (from (ex0, ey0) to (ex1, ey1), box bx0..by1) and f (likewise, box
+    cx0..cy1) of a ring of ``k`` edges fail the pair test (``_pair_bad_xy``, the edge of lower
+    index first); disjoint boxes of non-adjacent edges cannot touch."""
     i = min(e, f)
     j = max(e, f)
     adjacent = j == i + 1 or (i == 0 and j == k - 1)
@@ -516,10 +559,18 @@ def _pair_check(pts, L, nL, R, nR, e, f, bx0, bx1, by0, by1, cx0, cx1, cy0, cy1)
         m = CULL_MARGIN
         if bx1 + m < cx0 or cx1 + m < bx0 or by1 + m < cy0 or cy1 + m < by0:
             return False
-    return _ring_pair_bad(pts, L, nL, R, nR, i, j)
+    if e < f:
+        return _pair_bad_xy(adjacent, ex0, ey0, ex1, ey1, fx0, fy0, fx1, fy1)
+    return _pair_bad_xy(adjacent, fx0, fy0, fx1, fy1, ex0, ey0, ex1, ey1)
 
 
-@njit(cache=True)
+@njit(**LEAF)
+def _edge_zero(pts, L, nL, R, nR, e):
+    ax, ay, bx, by = _ring_edge(pts, L, nL, R, nR, e)
+    return ax == bx and ay == by
+
+
+@njit(**LEAF)
 def _edge_vs_ring(pts, L, nL, R, nR, e, with_front, Lbox, Rbox, LblkBox, RblkBox):
     """Ring edge ``e`` is non-degenerate and passes the pair test against every other ring
     edge (the front edge l_n -> r_m only when ``with_front``). ``Lbox``, ``Rbox``: bounding
@@ -538,39 +589,49 @@ def _edge_vs_ring(pts, L, nL, R, nR, e, with_front, Lbox, Rbox, LblkBox, RblkBox
     by1 = max(ay, by)
     m = CULL_MARGIN
     nb = (nL - 1) // BLOCK  # complete blocks of L segments
-    for b in range(nb + 1):
-        lo = b * BLOCK
+    for blk in range(nb + 1):
+        lo = blk * BLOCK
         hi = min(lo + BLOCK, nL - 1)
-        if b < nb and (bx1 + m < LblkBox[b, 0] or LblkBox[b, 1] + m < bx0
-                       or by1 + m < LblkBox[b, 2] or LblkBox[b, 3] + m < by0):
+        if blk < nb and (bx1 + m < LblkBox[blk, 0] or LblkBox[blk, 1] + m < bx0
+                         or by1 + m < LblkBox[blk, 2] or LblkBox[blk, 3] + m < by0):
             continue
-        for i in range(lo, hi):  # L segment i is ring edge i
-            if i != e and _pair_check(pts, L, nL, R, nR, e, i, bx0, bx1, by0, by1, Lbox[i, 0],
-                                      Lbox[i, 1], Lbox[i, 2], Lbox[i, 3]):
+        for i in range(lo, hi):  # L segment i (l_i -> l_i+1) is ring edge i
+            if i == e:
+                continue
+            p = L[i]
+            q = L[i + 1]
+            if _pair_check_xy(k, e, i, ax, ay, bx, by, pts[p, 0], pts[p, 1], pts[q, 0],
+                              pts[q, 1], bx0, bx1, by0, by1, Lbox[i, 0], Lbox[i, 1],
+                              Lbox[i, 2], Lbox[i, 3]):
                 return False
     nb = (nR - 1) // BLOCK
-    for b in range(nb + 1):
-        lo = b * BLOCK
+    for blk in range(nb + 1):
+        lo = blk * BLOCK
         hi = min(lo + BLOCK, nR - 1)
-        if b < nb and (bx1 + m < RblkBox[b, 0] or RblkBox[b, 1] + m < bx0
-                       or by1 + m < RblkBox[b, 2] or RblkBox[b, 3] + m < by0):
+        if blk < nb and (bx1 + m < RblkBox[blk, 0] or RblkBox[blk, 1] + m < bx0
+                         or by1 + m < RblkBox[blk, 2] or RblkBox[blk, 3] + m < by0):
             continue
-        for j in range(lo, hi):  # R segment j (r_j - r_j+1) is ring edge k - 2 - j
+        for j in range(lo, hi):  # R segment j is ring edge k - 2 - j, from r_j+1 to r_j
             f = k - 2 - j
-            if f != e and _pair_check(pts, L, nL, R, nR, e, f, bx0, bx1, by0, by1, Rbox[j, 0],
-                                      Rbox[j, 1], Rbox[j, 2], Rbox[j, 3]):
+            if f == e:
+                continue
+            p = R[j + 1]
+            q = R[j]
+            if _pair_check_xy(k, e, f, ax, ay, bx, by, pts[p, 0], pts[p, 1], pts[q, 0],
+                              pts[q, 1], bx0, bx1, by0, by1, Rbox[j, 0], Rbox[j, 1],
+                              Rbox[j, 2], Rbox[j, 3]):
                 return False
     for f in (nL - 1, k - 1):  # the front and the back edge
         if f == e or (f == nL - 1 and not with_front):
             continue
         cx, cy, dx, dy = _ring_edge(pts, L, nL, R, nR, f)
-        if _pair_check(pts, L, nL, R, nR, e, f, bx0, bx1, by0, by1, min(cx, dx), max(cx, dx),
-                       min(cy, dy), max(cy, dy)):
+        if _pair_check_xy(k, e, f, ax, ay, bx, by, cx, cy, dx, dy, bx0, bx1, by0, by1,
+                          min(cx, dx), max(cx, dx), min(cy, dy), max(cy, dy)):
             return False
     return True
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _segment_cache(pts, a, b, box, mid, rad, i):
     box[0] = min(pts[a, 0], pts[b, 0])
     box[1] = max(pts[a, 0], pts[b, 0])
@@ -581,7 +642,7 @@ def _segment_cache(pts, a, b, box, mid, rad, i):
     rad[i] = 0.5 * math.hypot(pts[b, 0] - pts[a, 0], pts[b, 1] - pts[a, 1])
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _block_box(box, i, blk):
     """After segment ``i`` was added: when it completes a block, store the block's box."""
     if (i + 1) % BLOCK != 0:
@@ -599,7 +660,7 @@ def _block_box(box, i, blk):
         blk[b, 3] = max(blk[b, 3], box[j, 3])
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _width_state(wvL, wsL, nL, wvR, wsR, nR, wmin, wmax):
     """(any value below w_min, any L query above w_max, any R query above w_max)."""
     short = False
@@ -628,7 +689,7 @@ def _width_state(wvL, wsL, nL, wvR, wsR, nR, wmin, wmax):
     return short, longL, longR
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _side_sums(pts, P, n, cum, cum2, tc, tc2):
     """Prefix sums at path position n - 1 after P gained its vertex there."""
     p = n - 1
@@ -647,7 +708,7 @@ def _side_sums(pts, P, n, cum, cum2, tc, tc2):
         tc2[p] = 0.0
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _var_from_sums(s1, s2, m):
     if m < 2:
         return 0.0
@@ -656,7 +717,7 @@ def _var_from_sums(s1, s2, m):
     return v if v > 0.0 else 0.0
 
 
-@njit(cache=True)
+@njit(**LEAF)
 def _features(wvL, wsL, nL, wvR, wsR, nR, Lcum, Lcum2, Ltc, Ltc2, Rcum, Rcum2, Rtc, Rtc2,
               out):
     """The 8 ranking features of ``rld.costs.ranking_features`` (CLC section VII) from the
@@ -695,7 +756,7 @@ def _features(wvL, wsL, nL, wvR, wsR, nR, Lcum, Lcum2, Ltc, Ltc2, Rcum, Rcum2, R
 @njit(cache=True)
 def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, wmin, wmax,
                     dist_weight, lookahead, max_iterations, guide_l, guide_r, banned,
-                    forbid_l=-1, forbid_r=-1, dead_end=-1.0, stale=0):
+                    forbid_l=-1, forbid_r=-1, dead_end=-1.0, stale=0, memo=True):
     """CLC Alg. 2: enumerate the path pairs from (start_l, start_r) that satisfy CD (eq. 6).
 
     ``pts`` (N, 2) float64 metres; ``adj_ptr`` (N+1,), ``adj_idx`` the search graph in CSR form
@@ -708,7 +769,8 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     path; ``forbid_l`` (``forbid_r``, -1: none) is not the next left (right) vertex right
     after the whole left (right) guide, but may come later (the contested-choice dives of
     ``clc.search``); ``dead_end`` the graph's ``dead_end_score`` when known (< 0: computed
-    here).
+    here); ``memo=False`` scores a frame's options again at every visit instead of once (the
+    same search, slower: the tests' reference for the memo).
 
     Returns ``(left_flat, left_ptr, right_flat, right_ptr, features, iterations, complete)``:
     candidate k's left boundary is ``left_flat[left_ptr[k]:left_ptr[k+1]]`` (likewise right),
@@ -741,6 +803,11 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     triedL = np.zeros((D, maxdeg), dtype=np.bool_)
     triedR = np.zeros((D, maxdeg), dtype=np.bool_)
     made_by = np.full(D, -1, dtype=np.int64)
+    # The decider's memo: each side's option scores per frame (``_score_options``), valid
+    # from the frame's first visit until an extension makes a new frame at that depth.
+    scoreL = np.empty((D, maxdeg))
+    scoreR = np.empty((D, maxdeg))
+    scored = np.zeros(D, dtype=np.bool_)
     # The depth of the deepest feasible frame on the current path (the start frame counts).
     last_ok = np.zeros(D, dtype=np.int64)
     # Width values per frame (row) and path position (column). They start small and grow
@@ -805,12 +872,18 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
             kl, vl, kr, vr = -1, -1, -1, -1
         else:
             unwind = D
-            kl, vl = _choose_option(pts, adj_ptr, adj_idx, L, nL, triedL[f], in_path,
-                                    max_turn, hx, hy, dist_weight, lookahead, dead_end,
-                                    guide_l, on_gl[nL - 1], forbid_l)
-            kr, vr = _choose_option(pts, adj_ptr, adj_idx, R, nR, triedR[f], in_path,
-                                    max_turn, hx, hy, dist_weight, lookahead, dead_end,
-                                    guide_r, on_gr[nR - 1], forbid_r)
+            if not scored[f] or not memo:
+                _score_options(pts, adj_ptr, adj_idx, L, nL, triedL[f], in_path, max_turn, hx,
+                               hy, dist_weight, lookahead, dead_end, guide_l, on_gl[nL - 1],
+                               forbid_l, scoreL[f])
+                _score_options(pts, adj_ptr, adj_idx, R, nR, triedR[f], in_path, max_turn, hx,
+                               hy, dist_weight, lookahead, dead_end, guide_r, on_gr[nR - 1],
+                               forbid_r, scoreR[f])
+                scored[f] = True
+            kl, vl = _pick_option(adj_ptr, adj_idx, L[nL - 1], nL, triedL[f], scoreL[f],
+                                  guide_l, on_gl[nL - 1])
+            kr, vr = _pick_option(adj_ptr, adj_idx, R[nR - 1], nR, triedR[f], scoreR[f],
+                                  guide_r, on_gr[nR - 1])
         if kl < 0 and kr < 0:
             # Frame exhausted (or abandoned): undo the extension that made it.
             if depth == 0:
@@ -962,6 +1035,7 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
                 in_path[R[nR]] = False
         else:
             depth = g
+            scored[g] = False  # a new frame at this depth
         if give_up:
             gave_up = True
             unwind = last_ok[g]  # the frames above it are undone as exhausted ones
