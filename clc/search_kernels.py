@@ -753,6 +753,38 @@ def _features(wvL, wsL, nL, wvR, wsR, nR, Lcum, Lcum2, Ltc, Ltc2, Rcum, Rcum2, R
     out[7] = _var_from_sums(Rtc[nR - 1], Rtc2[nR - 1], nR - 2)
 
 
+@njit(**LEAF)
+def _grow_side(pts, P, nP, v, k, Q, nQ, triedP, triedQ, f, g, in_path, Pbox, Pmid, Prad,
+               PblkBox, Pcum, Pcum2, Ptc, Ptc2, on_g, guide, wvP, wsP, wvQ, wsQ, Qmid, Qrad):
+    """Extend boundary P (``nP`` vertices; Q the other boundary) by vertex ``v``, its end's
+    option in slot ``k``, from frame ``f`` to frame ``g``: the tried options of both sides
+    (P's option at f is tried; at g P starts afresh and Q keeps f's), the segment caches and
+    prefix sums of P, P's guide flag, and the width values at g: P's unchanged, P's new
+    queries to Q, and Q's values lowered to the new P segment (all of them computed when P
+    had a single vertex before). The caller adds 1 to ``nP``."""
+    triedP[f, k] = True
+    for j in range(triedP.shape[1]):  # loops, not slice copies: those need numba's NRT
+        triedP[g, j] = False
+        triedQ[g, j] = triedQ[f, j]
+    n = nP + 1
+    P[nP] = v
+    in_path[v] = True
+    _segment_cache(pts, P[n - 2], v, Pbox[n - 2], Pmid[n - 2], Prad, n - 2)
+    _block_box(Pbox, n - 2, PblkBox)
+    _side_sums(pts, P, n, Pcum, Pcum2, Ptc, Ptc2)
+    on_g[n - 1] = on_g[n - 2] and n - 1 < guide.shape[0] and guide[n - 1] == v
+    for j in range(n - 1):
+        wvP[g, j] = wvP[f, j]
+    for j in range(n - 2):
+        wsP[g, j] = wsP[f, j]
+    wvP[g, n - 1] = _query_to_target(pts, v, -1, Q, nQ, Qmid, Qrad)
+    wsP[g, n - 2] = _query_to_target(pts, P[n - 2], v, Q, nQ, Qmid, Qrad)
+    if n == 2:
+        _recompute_all(pts, Q, nQ, P, n, Pmid, Prad, wvQ[g], wsQ[g])
+    else:
+        _lower_other(pts, Q, nQ, Qmid, Qrad, wvQ[f], wsQ[f], wvQ[g], wsQ[g], P[n - 2], v)
+
+
 @njit(cache=True)
 def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, wmin, wmax,
                     dist_weight, lookahead, max_iterations, guide_l, guide_r, banned,
@@ -932,50 +964,16 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
             wvR = grow_2d(wvR, rows, cols)
             wsR = grow_2d(wsR, rows, cols)
         if side == 0:
-            triedL[f, kl] = True
-            triedL[g, :] = False
-            triedR[g, :] = triedR[f, :]
-            L[nL] = vl
+            _grow_side(pts, L, nL, vl, kl, R, nR, triedL, triedR, f, g, in_path, Lbox, Lmid,
+                       Lrad, LblkBox, Lcum, Lcum2, Ltc, Ltc2, on_gl, guide_l, wvL, wsL, wvR,
+                       wsR, Rmid, Rrad)
             nL += 1
-            in_path[vl] = True
-            _segment_cache(pts, L[nL - 2], vl, Lbox[nL - 2], Lmid[nL - 2], Lrad, nL - 2)
-            _block_box(Lbox, nL - 2, LblkBox)
-            _side_sums(pts, L, nL, Lcum, Lcum2, Ltc, Ltc2)
-            on_gl[nL - 1] = on_gl[nL - 2] and nL - 1 < guide_l.shape[0] and \
-                guide_l[nL - 1] == vl
-            # Width values: L's values are unchanged (R did not move), new L queries, R's
-            # values fall to the new L segment.
-            wvL[g, : nL - 1] = wvL[f, : nL - 1]
-            wsL[g, : nL - 2] = wsL[f, : nL - 2]
-            wvL[g, nL - 1] = _query_to_target(pts, vl, -1, R, nR, Rmid, Rrad)
-            wsL[g, nL - 2] = _query_to_target(pts, L[nL - 2], vl, R, nR, Rmid, Rrad)
-            if nL == 2:
-                _recompute_all(pts, R, nR, L, nL, Lmid, Lrad, wvR[g], wsR[g])
-            else:
-                _lower_other(pts, R, nR, Rmid, Rrad, wvR[f], wsR[f], wvR[g], wsR[g],
-                             L[nL - 2], vl)
             new_edge = nL - 2
         else:
-            triedR[f, kr] = True
-            triedR[g, :] = False
-            triedL[g, :] = triedL[f, :]
-            R[nR] = vr
+            _grow_side(pts, R, nR, vr, kr, L, nL, triedR, triedL, f, g, in_path, Rbox, Rmid,
+                       Rrad, RblkBox, Rcum, Rcum2, Rtc, Rtc2, on_gr, guide_r, wvR, wsR, wvL,
+                       wsL, Lmid, Lrad)
             nR += 1
-            in_path[vr] = True
-            _segment_cache(pts, R[nR - 2], vr, Rbox[nR - 2], Rmid[nR - 2], Rrad, nR - 2)
-            _block_box(Rbox, nR - 2, RblkBox)
-            _side_sums(pts, R, nR, Rcum, Rcum2, Rtc, Rtc2)
-            on_gr[nR - 1] = on_gr[nR - 2] and nR - 1 < guide_r.shape[0] and \
-                guide_r[nR - 1] == vr
-            wvR[g, : nR - 1] = wvR[f, : nR - 1]
-            wsR[g, : nR - 2] = wsR[f, : nR - 2]
-            wvR[g, nR - 1] = _query_to_target(pts, vr, -1, L, nL, Lmid, Lrad)
-            wsR[g, nR - 2] = _query_to_target(pts, R[nR - 2], vr, L, nL, Lmid, Lrad)
-            if nR == 2:
-                _recompute_all(pts, L, nL, R, nR, Rmid, Rrad, wvL[g], wsL[g])
-            else:
-                _lower_other(pts, L, nL, Lmid, Lrad, wvL[f], wsL[f], wvL[g], wsL[g],
-                             R[nR - 2], vr)
             new_edge = nL  # the new R edge's ring index
         made_by[g] = side
         # C_poly: the new permanent edge, and (when nL + nR reaches 3) the back edge, which
