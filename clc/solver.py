@@ -67,7 +67,7 @@ DIVE_ROUNDS = 3
 #: winner within the dive reach, where the second difference of its matching-line lengths
 #: exceeds ``JOG_THRESHOLD_M``, are revisited like close calls; 0 dives turns them off
 #: (docs/clc.md, "Jog dives").
-JOG_THRESHOLD_M = 1.25
+JOG_THRESHOLD_M = 1.0
 JOG_DIVES = 2
 #: After the dives, drop the outward detours of the winner that RLD's objective prefers
 #: without (``clc.search.drop_detours``; ``lane.stats["dropped"]``).
