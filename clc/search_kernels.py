@@ -58,9 +58,8 @@ from rld.geometry_kernels import (
     orient,
     point_segment_distance,
     point_segment_param,
+    ring_edges_touch,
     segment_distance,
-    segment_distance_end,
-    segments_intersect,
     turn_angle,
 )
 
@@ -505,13 +504,6 @@ def _recompute_all(pts, query, nq, target, nt, tmid, trad, wv, ws):
 
 
 @njit(**LEAF)
-def _boxes_apart(ax, ay, bx, by, cx, cy, dx, dy):
-    m = CULL_MARGIN
-    return (max(ax, bx) + m < min(cx, dx) or max(cx, dx) + m < min(ax, bx)
-            or max(ay, by) + m < min(cy, dy) or max(cy, dy) + m < min(ay, by))
-
-
-@njit(**LEAF)
 def _ring_edge(pts, L, nL, R, nR, e):
     """Endpoints (ax, ay, bx, by) of ring edge ``e`` of the lane ring L + reversed(R)."""
     k = nL + nR
@@ -532,26 +524,13 @@ def _ring_edge(pts, L, nL, R, nR, e):
 
 
 @njit(**LEAF)
-def _pair_bad_xy(adjacent, ax, ay, bx, by, cx, cy, dx, dy):
-    """The test ``rld.geometry_kernels.polyline_self_intersects`` makes for ring edges i < j,
-    a-b (edge i) and c-d (edge j): adjacent edges fail when they come closest anywhere but at
-    their ends, others when they intersect. Scalars only: the ring check's inner loops pass no
-    arrays, whose reference counts numba would otherwise adjust at every call (atomic
-    operations, half the search's time before 2026-12-03)."""
-    if adjacent:
-        _, end = segment_distance_end(ax, ay, bx, by, cx, cy, dx, dy)
-        return not end
-    if _boxes_apart(ax, ay, bx, by, cx, cy, dx, dy):
-        return False
-    return segments_intersect(ax, ay, bx, by, cx, cy, dx, dy)
-
-
-@njit(**LEAF)
 def _pair_check_xy(k, e, f, ex0, ey0, ex1, ey1, fx0, fy0, fx1, fy1, bx0, bx1, by0, by1,
                    cx0, cx1, cy0, cy1):
     """Ring edges e (from (ex0, ey0) to (ex1, ey1), box bx0..by1) and f (likewise, box
-    cx0..cy1) of a ring of ``k`` edges fail the pair test (``_pair_bad_xy``, the edge of lower
-    index first); disjoint boxes of non-adjacent edges cannot touch."""
+    cx0..cy1) of a ring of ``k`` edges fail the pair test
+    (``rld.geometry_kernels.ring_edges_touch``, the edge of lower index first); disjoint
+    boxes of non-adjacent edges cannot touch. Scalars only: the ring check's inner loops pass
+    no arrays, whose reference counts numba would otherwise adjust at every call."""
     i = min(e, f)
     j = max(e, f)
     adjacent = j == i + 1 or (i == 0 and j == k - 1)
@@ -560,8 +539,8 @@ def _pair_check_xy(k, e, f, ex0, ey0, ex1, ey1, fx0, fy0, fx1, fy1, bx0, bx1, by
         if bx1 + m < cx0 or cx1 + m < bx0 or by1 + m < cy0 or cy1 + m < by0:
             return False
     if e < f:
-        return _pair_bad_xy(adjacent, ex0, ey0, ex1, ey1, fx0, fy0, fx1, fy1)
-    return _pair_bad_xy(adjacent, fx0, fy0, fx1, fy1, ex0, ey0, ex1, ey1)
+        return ring_edges_touch(adjacent, ex0, ey0, ex1, ey1, fx0, fy0, fx1, fy1)
+    return ring_edges_touch(adjacent, fx0, fy0, fx1, fy1, ex0, ey0, ex1, ey1)
 
 
 @njit(**LEAF)

@@ -320,6 +320,19 @@ def polyline_segments_distance_many(q, poly, out):
 
 
 @njit(cache=True)
+def ring_edges_touch(adjacent, ax, ay, bx, by, cx, cy, dx, dy):
+    """The pair test of a simple ring, for its edges a-b and c-d (the one of lower index
+    first): adjacent edges, which share one vertex, may come closest only at their ends (no
+    fold-back, ``segment_distance_end``); others may not meet at all
+    (``segments_intersect``). True when the pair breaks the ring. Used by
+    ``polyline_self_intersects`` and by the CLC search's incremental ring check."""
+    if adjacent:
+        _, end = segment_distance_end(ax, ay, bx, by, cx, cy, dx, dy)
+        return not end
+    return segments_intersect(ax, ay, bx, by, cx, cy, dx, dy)
+
+
+@njit(cache=True)
 def polyline_self_intersects(ring):
     """Whether the closed ring ``ring`` (k, 2; last point joins the first) is not simple:
     two non-adjacent edges share a point, or two adjacent edges overlap."""
@@ -343,12 +356,7 @@ def polyline_self_intersects(ring):
             if (not adjacent and (min(cx, dx) > x1 + EPS or max(cx, dx) < x0 - EPS
                                   or min(cy, dy) > y1 + EPS or max(cy, dy) < y0 - EPS)):
                 continue  # segments_intersect's box test, this segment's box hoisted
-            if adjacent:
-                # Adjacent edges share one vertex and may touch only there (no fold-back).
-                _, end = segment_distance_end(ax, ay, bx, by, cx, cy, dx, dy)
-                if not end:
-                    return True
-            elif segments_intersect(ax, ay, bx, by, cx, cy, dx, dy):
+            if ring_edges_touch(adjacent, ax, ay, bx, by, cx, cy, dx, dy):
                 return True
     return False
 
