@@ -30,7 +30,8 @@ from rld.costs import open_path_costs, ranking_features
 from rld.types import LaneParams, Pose
 
 __all__ = ["SearchGraph", "SearchResult", "CandidateList", "closable", "merge_results",
-           "search_graph", "enumerate_candidates", "contested_dives", "GRAPHS"]
+           "search_graph", "enumerate_candidates", "contested_dives", "claim_dive", "dive_at",
+           "GRAPHS"]
 
 #: Search-graph constructions: ``radius`` (IV-A, the paper's choice) and ``delaunay`` (IV-B).
 GRAPHS = ("radius", "delaunay")
@@ -253,7 +254,7 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
     cone again somewhere, a second one bans it outright (``banned``), so it cannot find its way
     back to the same lane. Returns one result per search, in order (left first). ``skip``: the
     close calls already revisited, as (side, path up to and with the cone, other boundary,
-    ``cut_other``) keys; the ones revisited here are added to it and not run again.
+    ``cut_other``) keys (``claim_dive``); the ones revisited here are added to it and not run again.
 
     ``cut_other``: the guide keeps of the other boundary only its cones up to and with the one
     nearest path[j - 1] (the last cone kept on this side), so the dive rebuilds both boundaries
@@ -284,11 +285,8 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
                 if stopped is not None:
                     stopped.append(True)
                 return out
-            if skip is not None:
-                key = (side, path[:j + 1].tobytes(), other.tobytes(), cut_other)
-                if key in skip:
-                    continue
-                skip.add(key)
+            if skip is not None and not claim_dive(skip, side, path, int(j), other, cut_other):
+                continue
             res, guide = dive_at(points, pose, params, graph, start, left, right, side, int(j),
                                  iterations, cut_other)
             out.append(res)
@@ -300,6 +298,20 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
                                                 start=start, guide=guide,
                                                 banned=path[j:j + 1]))
     return out
+
+
+def claim_dive(done: set, side: int, path: np.ndarray, j: int, other: np.ndarray,
+               cut_other: bool = False) -> bool:
+    """Whether the dive at position ``j`` of boundary ``path`` (``side`` 0 left, 1 right;
+    ``other`` the other boundary) is still to be made, recording it in ``done`` when it is.
+    A dive is identified by the path up to and with its cone, the other boundary and
+    ``cut_other``: the key ``contested_dives`` and ``clc.solver``'s jog dives share, so that
+    neither revisits a close call the other has."""
+    key = (side, path[:j + 1].tobytes(), other.tobytes(), bool(cut_other))
+    if key in done:
+        return False
+    done.add(key)
+    return True
 
 
 def dive_at(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,

@@ -37,6 +37,7 @@ from scipy.spatial import cKDTree
 from clc.ranker import get_ranker
 from clc.search import (
     GRAPHS,
+    claim_dive,
     closable,
     contested_dives,
     dive_at,
@@ -144,10 +145,8 @@ def _jog_dives(points, pose, params, res, left, right, budget, done, deadline=ma
                 stopped.append(True)
             break
         path, other = (left, right) if side == 0 else (right, left)
-        key = (side, path[:j + 1].tobytes(), other.tobytes(), False)
-        if key in done:
+        if not claim_dive(done, side, path, j, other):
             continue
-        done.add(key)
         out.append(dive_at(points, pose, params, res.graph, res.start, left, right, side, j,
                            budget)[0])
     return out
