@@ -21,7 +21,10 @@ from rld.simulation import simulate_lap
 from rld.tracks import Track
 from rld.types import LaneParams
 
-__all__ = ["PoseRecord", "run_protocol", "summarize", "STABILITY_RADII_M"]
+__all__ = ["PoseRecord", "run_protocol", "summarize", "lap_interval", "STABILITY_RADII_M"]
+
+#: The categories that count as critical failures (DESIGN.md): diverging below 20 m, no lane.
+CRITICAL = frozenset({"diverging_lt20", "failed"})
 
 #: The radii (m) at which the stability ratio of Huang et al. (eq. 5) is recorded.
 STABILITY_RADII_M = (5.0, 10.0, 20.0)
@@ -184,9 +187,8 @@ def summarize(records: list[PoseRecord]) -> dict:
     out: dict = {"poses": n}
     for c in CATEGORIES:
         out[c] = 100.0 * cats.count(c) / n
-    crit = {"diverging_lt20", "failed"}
-    out["critical"] = 100.0 * sum(c in crit for c in cats) / n
-    out["critical_tolerant"] = 100.0 * sum(r.category_tolerant in crit for r in records) / n
+    out["critical"] = 100.0 * sum(c in CRITICAL for c in cats) / n
+    out["critical_tolerant"] = 100.0 * sum(r.category_tolerant in CRITICAL for r in records) / n
     iou20 = [r.iou20 for r in records if not math.isnan(r.iou20)]
     out["mean_iou"] = 100.0 * float(np.mean([r.iou for r in records]))
     out["mean_iou20"] = 100.0 * float(np.mean(iou20)) if iou20 else math.nan
@@ -207,3 +209,34 @@ def summarize(records: list[PoseRecord]) -> dict:
         out["complete"] = 100.0 * float(np.mean(done))
         out["iterations_median"] = float(np.median([r.iterations for r in records]))
     return out
+
+
+def lap_interval(records: Iterable[PoseRecord], tolerant: bool = True, level: float = 0.95,
+                 resamples: int = 2000, seed: int = 0) -> tuple[float, float]:
+    """A percentile bootstrap interval (%, ``level`` two-sided) of the pooled critical rate of
+    ``records`` (tolerant or strict rule), resampling whole laps (one track with one seed's
+    false positives) with replacement, ``resamples`` times from ``seed``.
+
+    Whole laps, not poses: a lap's false positives are a few persistent configurations, each
+    seen from many poses in a row (a wrong lane near one false positive is typically 15-25
+    consecutive critical poses), so poses are far from independent and an interval over
+    poses would be several times too narrow. (lo, hi) equal the pooled rate when every lap
+    has the same rate."""
+    if not 0.0 < level < 1.0:
+        raise ValueError(f"level must be in (0, 1), got {level!r}")
+    if resamples < 1:
+        raise ValueError(f"resamples must be at least 1, got {resamples!r}")
+    laps: dict[tuple, list[int]] = {}
+    for r in records:
+        cat = r.category_tolerant if tolerant else r.category
+        acc = laps.setdefault((r.track, r.seed), [0, 0])
+        acc[0] += 1
+        acc[1] += cat in CRITICAL
+    if not laps:
+        raise ValueError("no records")
+    n, hits = np.array(list(laps.values()), dtype=np.float64).T
+    pick = np.random.default_rng(seed).integers(0, n.size, size=(resamples, n.size))
+    rates = 100.0 * hits[pick].sum(axis=1) / n[pick].sum(axis=1)
+    tail = 100.0 * (1.0 - level) / 2.0
+    lo, hi = np.percentile(rates, [tail, 100.0 - tail])
+    return float(lo), float(hi)

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rld.evaluation import PoseRecord, run_protocol, summarize
+from rld.evaluation import PoseRecord, lap_interval, run_protocol, summarize
 from rld.metrics import CATEGORIES
 from rld.tracks import Track
 
@@ -130,7 +130,8 @@ def evaluate(tracks: Sequence[Track], specs: Sequence[MethodSpec], ranges=(30.0,
 def summaries(records: Iterable[PoseRecord]) -> list[dict]:
     """``summarize`` per (method, range, rate), in first-seen order, over every seed's poses;
     ``seeds`` lists the seeds (sorted), and ``critical_by_seed`` / ``critical_tolerant_by_seed``
-    each seed's critical rates in that order (%)."""
+    each seed's critical rates in that order (%), ``critical_tolerant_interval`` the 95 %
+    interval of the pooled tolerant rate with whole laps resampled (``lap_interval``)."""
     groups: dict[tuple, list[PoseRecord]] = {}
     for r in records:
         groups.setdefault((r.method, r.range_m, r.fp_rate), []).append(r)
@@ -142,26 +143,30 @@ def summaries(records: Iterable[PoseRecord]) -> list[dict]:
                [summarize([r for r in recs if r.seed == sd]) for sd in seeds])
         rows.append({"method": m, "range_m": rng, "fp_rate": fp, **pooled,
                      "seeds": seeds, "critical_by_seed": [p["critical"] for p in per],
-                     "critical_tolerant_by_seed": [p["critical_tolerant"] for p in per]})
+                     "critical_tolerant_by_seed": [p["critical_tolerant"] for p in per],
+                     "critical_tolerant_interval": list(lap_interval(recs))})
     return rows
 
 
 def seeds_markdown(rows: list[dict]) -> str:
     """Each seed's critical rates per method, range and false-positive rate, and their spread:
     one seed's false positives are a few persistent configurations, each seen from many poses
-    in a row, so a single seed's rate moves by whole points from seed to seed. Empty when
-    every row has one seed."""
+    in a row, so a single seed's rate moves by whole points from seed to seed. The last column
+    is the pooled tolerant rate with its 95 % interval over laps (``lap_interval``). Empty
+    when every row has one seed."""
     if all(len(r.get("seeds", [])) < 2 for r in rows):
         return ""
     parts = ["| method | R (m) | FP | seeds | critical % per seed | tolerant % per seed | "
-             "tolerant: all seeds (min - max) |", "|" + "---|" * 7]
+             "tolerant: all seeds (min - max) | tolerant: 95 % interval (laps resampled) |",
+             "|" + "---|" * 8]
     for r in rows:
         strict = " / ".join(f"{v:.2f}" for v in r["critical_by_seed"])
         tol = r["critical_tolerant_by_seed"]
+        lo, hi = r["critical_tolerant_interval"]
         parts.append(f"| {r['method']} | {r['range_m']:g} | {r['fp_rate']:.0%} | "
                      f"{', '.join(str(v) for v in r['seeds'])} | {strict} | "
                      f"{' / '.join(f'{v:.2f}' for v in tol)} | {r['critical_tolerant']:.2f} "
-                     f"({min(tol):.2f} - {max(tol):.2f}) |")
+                     f"({min(tol):.2f} - {max(tol):.2f}) | {lo:.2f} - {hi:.2f} |")
     return "\n".join(parts) + "\n"
 
 

@@ -8,9 +8,11 @@ import math
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rld.cli import main
-from rld.evaluation import run_protocol, summarize
+from rld.evaluation import PoseRecord, lap_interval, run_protocol, summarize
 from rld.generator import generate_track
 from rld.report import (
     MethodSpec,
@@ -164,3 +166,54 @@ def test_failure_pictures_of_several_seeds_do_not_overwrite_each_other(tmp_path)
     pictures = list(folder.iterdir())
     assert len(pictures) == crit
     assert {p.name.split("_seed")[1].split("_")[0] for p in pictures} <= {"0", "5"}
+
+
+def _lap(track: str, seed: int, n: int, hits: int, strict_hits: int | None = None):
+    """A lap of ``n`` poses, the first ``hits`` critical under the tolerant rule (and the first
+    ``strict_hits``, default ``hits``, under the strict one)."""
+    strict_hits = hits if strict_hits is None else strict_hits
+    return [PoseRecord(track=track, pose=k, range_m=30.0, fp_rate=0.3, method="m", status="x",
+                       category="diverging_lt20" if k < strict_hits else "near_gt",
+                       category_tolerant="failed" if k < hits else "gt", iou=1.0,
+                       iou20=1.0, divergence_m=math.inf, pred_length_m=1.0, true_length_m=1.0,
+                       latency_s=0.001, n_cones=10, seed=seed) for k in range(n)]
+
+
+def test_lap_interval_by_hand():
+    # Two equal laps at 20 % and 60 %: a resample of two laps pools to 20, 40 or 60 % with
+    # probabilities 1/4, 1/2, 1/4, so the 95 % interval is 20 - 60 and a 40 % one is 40 - 40.
+    recs = _lap("a", 0, 10, 2) + _lap("b", 0, 10, 6)
+    assert lap_interval(recs) == (20.0, 60.0)
+    assert lap_interval(recs, level=0.4) == (40.0, 40.0)
+    # Laps are (track, seed): the same track with two seeds is two laps.
+    assert lap_interval(_lap("a", 0, 10, 2) + _lap("a", 1, 10, 6)) == (20.0, 60.0)
+    # The strict rule counts the strict categories.
+    assert lap_interval(_lap("a", 0, 10, 2, 5) + _lap("b", 0, 10, 2, 5), tolerant=False) == \
+        (50.0, 50.0)
+    # Deterministic for a seed.
+    many = [r for k in range(6) for r in _lap(f"t{k}", 0, 20, 3 * k)]
+    assert lap_interval(many, seed=3) == lap_interval(many, seed=3)
+    for bad in ({"level": 1.0}, {"level": 0.0}, {"resamples": 0}):
+        with pytest.raises(ValueError):
+            lap_interval(recs, **bad)
+    with pytest.raises(ValueError, match="no records"):
+        lap_interval([])
+
+
+@given(st.lists(st.tuples(st.integers(1, 30), st.floats(0, 1)), min_size=1, max_size=8),
+       st.floats(0.5, 0.99))
+@settings(max_examples=60, deadline=None)
+def test_lap_interval_lies_between_the_laps(laps, level):
+    recs = [r for k, (n, f) in enumerate(laps) for r in _lap(f"t{k}", 0, n, int(f * n))]
+    rates = [100.0 * int(f * n) / n for n, f in laps]
+    lo, hi = lap_interval(recs, level=level, resamples=300)
+    assert min(rates) - 1e-9 <= lo <= hi <= max(rates) + 1e-9
+    if len(set(rates)) == 1:
+        assert lo == hi == pytest.approx(rates[0])
+
+
+def test_seed_table_gives_the_lap_interval():
+    recs = _lap("a", 0, 10, 2) + _lap("b", 0, 10, 6) + _lap("a", 1, 10, 2) + _lap("b", 1, 10, 6)
+    (row,) = summaries(recs)
+    assert row["critical_tolerant_interval"] == list(lap_interval(recs))
+    assert "| 40.00 (40.00 - 40.00) | 20.00 - 60.00 |" in seeds_markdown([row])
