@@ -26,12 +26,12 @@ from scipy.spatial import Delaunay
 from clc import search_kernels as sk
 from rld import geometry as geo
 from rld.constraints import candidate_edges, find_starting_vertices, lane_is_feasible
-from rld.costs import open_path_costs, ranking_features
+from rld.costs import open_path_costs, ranking_features, within_radius
 from rld.types import LaneParams, Pose
 
 __all__ = ["SearchGraph", "SearchResult", "CandidateList", "closable", "merge_results",
            "search_graph", "enumerate_candidates", "contested_dives", "claim_dive", "dive_at",
-           "GRAPHS"]
+           "pair_drops", "GRAPHS"]
 
 #: Search-graph constructions: ``radius`` (IV-A, the paper's choice) and ``delaunay`` (IV-B).
 GRAPHS = ("radius", "delaunay")
@@ -406,6 +406,44 @@ def drop_detours(points: np.ndarray, pose: Pose, params: LaneParams, graph: Sear
         if not applied:
             break
     return paths[0], paths[1], dropped
+
+
+def pair_drops(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
+               left: np.ndarray, right: np.ndarray, reach_m: float,
+               pair_m: float = DUPLICATE_M) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The lanes made from ``left``, ``right`` by dropping one cone of a close pair: for every
+    two consecutive cones of a boundary nearer than ``pair_m`` (metres), the first of them in
+    the dive judge's window of ``reach_m`` (``rld.costs.within_radius``: up to and with the
+    first cone farther from the car), the lane without the first and the lane without the
+    second. A start vertex is never dropped; an interior cone only
+    when an edge of the search graph joins its two neighbours; and only lanes that satisfy the
+    shared predicates (``lane_is_feasible``) are returned. Our addition, docs/clc.md.
+
+    Such a pair is one cone and a false positive beside it (or one cone seen twice), which RLD's
+    objective cannot tell apart, so ``drop_detours`` leaves them alone (``DUPLICATE_M``). But a
+    lane that keeps both pays for the short edge between them, and a dive that drops a *true*
+    cone elsewhere to avoid it can then win the judge. Offered to the judge beside the dives
+    (``clc.solver.PAIR_DROPS``), the lane with one of the pair is compared with them."""
+    paths = [np.asarray(left, dtype=np.int64), np.asarray(right, dtype=np.int64)]
+    out = []
+    for side, p in enumerate(paths):
+        if p.size < 3:
+            continue
+        head = within_radius(points, p, pose, reach_m).size
+        for j in range(min(head, p.size - 1)):
+            d = points[p[j + 1]] - points[p[j]]
+            if math.hypot(d[0], d[1]) >= pair_m:
+                continue
+            for k in (j, j + 1):
+                if k == 0:
+                    continue
+                if k < p.size - 1 and not graph.has_edge(int(p[k - 1]), int(p[k + 1])):
+                    continue
+                trial = list(paths)
+                trial[side] = np.delete(p, k)
+                if lane_is_feasible(points[trial[0]], points[trial[1]], params):
+                    out.append((trial[0], trial[1]))
+    return out
 
 
 def drop_ring_join(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,

@@ -36,6 +36,7 @@ from scipy.spatial import cKDTree
 
 from clc.ranker import get_ranker
 from clc.search import (
+    DUPLICATE_M,
     GRAPHS,
     claim_dive,
     closable,
@@ -45,10 +46,17 @@ from clc.search import (
     drop_ring_join,
     enumerate_candidates,
     merge_results,
+    pair_drops,
     path_ahead,
 )
 from rld.constraints import lane_is_feasible, starting_vertex_pairs
-from rld.costs import lane_cost, width_roughness, width_second_differences, within_radius
+from rld.costs import (
+    lane_cost,
+    ranking_features,
+    width_roughness,
+    width_second_differences,
+    within_radius,
+)
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
 __all__ = ["ClcModel", "MATCH_TOLERANCE_M", "dive_cost", "jog_positions"]
@@ -92,6 +100,12 @@ SHORT_LANE_M = 20.0
 TRAPPED_CANDIDATES = 20
 #: The give-up rule's run of infeasible extensions (``enumerate_candidates(stale=...)``).
 STALE_EXTENSIONS = 8
+#: In each dive round, the winner without one cone of a close pair (two consecutive boundary
+#: cones nearer than ``clc.search.DUPLICATE_M`` within the reach; ``clc.search.pair_drops``)
+#: is judged beside the dives (docs/clc.md, "Close pairs"; ``lane.stats["pair_drops"]``).
+PAIR_DROPS = True
+#: The distance (m) below which two consecutive boundary cones are a close pair.
+PAIR_DROP_M = DUPLICATE_M
 #: Drop a closed lane's join cone when the ring is cheaper without it (``drop_ring_join``).
 RING_JOIN = True
 
@@ -287,12 +301,17 @@ class ClcModel:
         Each round also revisits the winner's largest width jogs (``_jog_dives``, at most
         JOG_DIVES): a false positive beside the line that the search took with a clear decider
         margin is no close call, but it jogs the width.
+        Each round also judges the winner without one cone of each close pair within the reach
+        (``clc.search.pair_drops``, PAIR_DROPS; open winners only): a false positive beside a
+        true cone makes a short edge that the dives otherwise escape by dropping a true cone
+        elsewhere.
         Returns the final (left, right, closed, score), the dives run, their iterations, the
         rounds run (a round that changes nothing ends them), the rounds whose winner was
-        short, the jog dives among the dives, and whether the deadline stopped them."""
+        short, the jog dives among the dives, the pair-drop lanes judged, and whether the
+        deadline stopped them."""
         p = self.params
         done: set[tuple] = set()
-        n_dives = iterations = rounds = short_rounds = n_jogs = 0
+        n_dives = iterations = rounds = short_rounds = n_jogs = n_pairs = 0
         cost = None  # the winner's, computed once a dive has a lane to compare
         # Whether the map reaches beyond SHORT_LANE_M (_short): found at most once per call,
         # when a winner is short (it does not depend on the winner; 9 us on a 409-cone map).
@@ -322,6 +341,18 @@ class ClcModel:
                 n_jogs += len(jogs)
                 dives += jogs
             best, best_cost = None, cost
+            drops = (pair_drops(points, pose, p, res.graph, left, right, DIVE_REACH_M,
+                                PAIR_DROP_M)
+                     if PAIR_DROPS and not winner[2] else [])
+            n_pairs += len(drops)
+            for a, b in drops:
+                if cost is None:
+                    cost = best_cost = dive_cost(points, pose, p, *winner[:3])
+                dc = dive_cost(points, pose, p, a, b)
+                if dc < best_cost:  # ties: the earlier lane
+                    f = ranking_features(points[a], points[b])[None, :]
+                    sc = float(self.ranker.score(points, pose, p, [(a, b, False)], f)[0])
+                    best, best_cost = (a, b, False, sc), dc
             for dive in dives:
                 n_dives += 1
                 iterations += dive.iterations
@@ -339,7 +370,7 @@ class ClcModel:
             if best is None:
                 break
             winner, cost = best, best_cost
-        return (*winner, n_dives, iterations, rounds, short_rounds, n_jogs,
+        return (*winner, n_dives, iterations, rounds, short_rounds, n_jogs, n_pairs,
                 cut or bool(stopped))
 
     def solve(self, points: np.ndarray, pose: Pose, colors=None, time_limit_s=None,
@@ -411,14 +442,14 @@ class ClcModel:
         left, right, closed = res.candidates[best]
         left, right = left.copy(), right.copy()
         score = float(scores[best])
-        n_dives = rounds = short_rounds = n_jogs = 0
+        n_dives = rounds = short_rounds = n_jogs = n_pairs = 0
         if not res.complete and self.params.contested_margin > 0:
-            (left, right, closed, score, n_dives, it, rounds, short_rounds, n_jogs,
+            (left, right, closed, score, n_dives, it, rounds, short_rounds, n_jogs, n_pairs,
              cut) = self._dive_rounds(points, pose, res, (left, right, closed, score), deadline)
             stats["cut_short"] |= cut
             iterations += it
         stats.update(dives=n_dives, dive_rounds=rounds, short_lane_rounds=short_rounds,
-                     jog_dives=n_jogs, iterations=iterations)
+                     jog_dives=n_jogs, pair_drops=n_pairs, iterations=iterations)
         stats["dropped"] = 0
         if not res.complete and not closed and DROP_DETOURS:
             left, right, stats["dropped"] = drop_detours(points, pose, self.params, res.graph,

@@ -214,29 +214,40 @@ def summarize(records: list[PoseRecord]) -> dict:
 def lap_interval(records: Iterable[PoseRecord], tolerant: bool = True, level: float = 0.95,
                  resamples: int = 2000, seed: int = 0) -> tuple[float, float]:
     """A percentile bootstrap interval (%, ``level`` two-sided) of the pooled critical rate of
-    ``records`` (tolerant or strict rule), resampling whole laps (one track with one seed's
-    false positives) with replacement, ``resamples`` times from ``seed``.
+    ``records`` (tolerant or strict rule), resampling whole laps ``resamples`` times from
+    ``seed``, in two levels: the tracks with replacement, then each drawn track's laps (one
+    per false-positive seed) with replacement.
 
     Whole laps, not poses: a lap's false positives are a few persistent configurations, each
     seen from many poses in a row (a wrong lane near one false positive is typically 15-25
     consecutive critical poses), so poses are far from independent and an interval over
-    poses would be several times too narrow. (lo, hi) equal the pooled rate when every lap
-    has the same rate."""
+    poses would be several times too narrow. Tracks first: the laps of one track share its
+    geometry (at 0 % false positives every seed gives the same lap), so the interval is as
+    wide as the number of tracks allows. (lo, hi) equal the pooled rate when every lap has
+    the same rate."""
     if not 0.0 < level < 1.0:
         raise ValueError(f"level must be in (0, 1), got {level!r}")
     if resamples < 1:
         raise ValueError(f"resamples must be at least 1, got {resamples!r}")
-    laps: dict[tuple, list[int]] = {}
+    laps: dict[str, dict[int, list[int]]] = {}
     for r in records:
         cat = r.category_tolerant if tolerant else r.category
-        acc = laps.setdefault((r.track, r.seed), [0, 0])
+        acc = laps.setdefault(r.track, {}).setdefault(r.seed, [0, 0])
         acc[0] += 1
         acc[1] += cat in CRITICAL
     if not laps:
         raise ValueError("no records")
-    n, hits = np.array(list(laps.values()), dtype=np.float64).T
-    pick = np.random.default_rng(seed).integers(0, n.size, size=(resamples, n.size))
-    rates = 100.0 * hits[pick].sum(axis=1) / n[pick].sum(axis=1)
+    rng = np.random.default_rng(seed)
+    per_track = [np.array(list(v.values()), dtype=np.float64) for v in laps.values()]
+    pick = rng.integers(0, len(per_track), size=(resamples, len(per_track)))
+    n = np.zeros(pick.shape)
+    hits = np.zeros(pick.shape)
+    for t, lap in enumerate(per_track):
+        slots = pick == t
+        k = lap.shape[0]
+        draw = lap[rng.integers(0, k, size=(int(slots.sum()), k))].sum(axis=1)
+        n[slots], hits[slots] = draw[:, 0], draw[:, 1]
+    rates = 100.0 * hits.sum(axis=1) / n.sum(axis=1)
     tail = 100.0 * (1.0 - level) / 2.0
     lo, hi = np.percentile(rates, [tail, 100.0 - tail])
     return float(lo), float(hi)

@@ -131,7 +131,7 @@ def summaries(records: Iterable[PoseRecord]) -> list[dict]:
     """``summarize`` per (method, range, rate), in first-seen order, over every seed's poses;
     ``seeds`` lists the seeds (sorted), and ``critical_by_seed`` / ``critical_tolerant_by_seed``
     each seed's critical rates in that order (%), ``critical_tolerant_interval`` the 95 %
-    interval of the pooled tolerant rate with whole laps resampled (``lap_interval``)."""
+    interval of the pooled tolerant rate, whole tracks and laps resampled (``lap_interval``)."""
     groups: dict[tuple, list[PoseRecord]] = {}
     for r in records:
         groups.setdefault((r.method, r.range_m, r.fp_rate), []).append(r)
@@ -152,12 +152,13 @@ def seeds_markdown(rows: list[dict]) -> str:
     """Each seed's critical rates per method, range and false-positive rate, and their spread:
     one seed's false positives are a few persistent configurations, each seen from many poses
     in a row, so a single seed's rate moves by whole points from seed to seed. The last column
-    is the pooled tolerant rate with its 95 % interval over laps (``lap_interval``). Empty
-    when every row has one seed."""
+    is the pooled tolerant rate with its 95 % interval, tracks and laps resampled
+    (``lap_interval``). Empty when every row has one seed."""
     if all(len(r.get("seeds", [])) < 2 for r in rows):
         return ""
     parts = ["| method | R (m) | FP | seeds | critical % per seed | tolerant % per seed | "
-             "tolerant: all seeds (min - max) | tolerant: 95 % interval (laps resampled) |",
+             "tolerant: all seeds (min - max) | "
+             "tolerant: 95 % interval (tracks, laps resampled) |",
              "|" + "---|" * 8]
     for r in rows:
         strict = " / ".join(f"{v:.2f}" for v in r["critical_by_seed"])

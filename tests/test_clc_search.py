@@ -26,6 +26,7 @@ from clc.search import (
     drop_detours,
     drop_ring_join,
     enumerate_candidates,
+    pair_drops,
     path_ahead,
     ring_join_change,
     search_graph,
@@ -1236,3 +1237,70 @@ def test_time_budget_skips_the_refining_searches():
     assert tight.ok and tight.stats["cut_short"] and tight.stats["over_time_limit"]
     assert tight.stats["dives"] == 0 and not tight.stats["trapped"]
     assert tight.stats["iterations"] == LaneParams().max_iterations
+
+
+def _pair_lane(dup_xy=(7.6, 1.75)):
+    """A straight lane 3.5 m wide, cones 3.5 m apart (x = 0 .. 21), and a false positive at
+    ``dup_xy`` taken into the left boundary after its third cone (x = 7)."""
+    xs = np.arange(7) * 3.5
+    left = np.column_stack([xs, np.full(7, 1.75)])
+    right = np.column_stack([xs, np.full(7, -1.75)])
+    pts = np.vstack([left, right, [dup_xy]])
+    L = np.array([0, 1, 2, 14, 3, 4, 5, 6])
+    return pts, L, np.arange(7, 14)
+
+
+def test_pair_drops_hand_worked():
+    pts, L, R = _pair_lane()
+    g = search_graph(pts, PARAMS)
+    got = pair_drops(pts, POSE, PARAMS, g, L, R, 25.0)
+    # The pair is cones 2 (x = 7) and 14 (x = 7.6), 0.6 m apart: the lane without each.
+    assert [a.tolist() for a, _ in got] == [[0, 1, 14, 3, 4, 5, 6], [0, 1, 2, 3, 4, 5, 6]]
+    assert all(b.tolist() == R.tolist() for _, b in got)
+    for a, b in got:
+        assert lane_is_feasible(pts[a], pts[b], PARAMS)
+    # pair_m below the pair's distance, or a reach that ends before it: nothing.
+    assert pair_drops(pts, POSE, PARAMS, g, L, R, 25.0, pair_m=0.55) == []
+    assert pair_drops(pts, POSE, PARAMS, g, L, R, 5.0) != []  # cone 2 is the window's last
+    assert pair_drops(pts, POSE, PARAMS, g, L, R, 3.0) == []
+    # The same as the right boundary: the right side is searched as well.
+    got = pair_drops(pts, POSE, PARAMS, g, R, L, 25.0)
+    assert [b.tolist() for _, b in got] == [[0, 1, 14, 3, 4, 5, 6], [0, 1, 2, 3, 4, 5, 6]]
+
+
+def test_pair_drops_keep_the_start_and_need_a_graph_edge():
+    # A pair at the start: the start vertex stays, its partner may go.
+    pts, _, R = _pair_lane(dup_xy=(0.6, 1.75))
+    L = np.array([0, 14, 1, 2, 3, 4, 5, 6])
+    g = search_graph(pts, PARAMS)
+    assert [a.tolist() for a, _ in pair_drops(pts, POSE, PARAMS, g, L, R, 25.0)] == \
+        [[0, 1, 2, 3, 4, 5, 6]]
+    # The false positive 5.6 m before the next cone: without it, 7 -> 12.6 m is longer than
+    # max_cone_spacing_m (no edge), so only cone 2 can go.
+    pts, L, R = _pair_lane(dup_xy=(7.6, 1.75))
+    pts[3:7, 0] += 2.1  # the cones after the pair move 2.1 m on
+    g = search_graph(pts, PARAMS)
+    assert not g.has_edge(2, 3)
+    got = pair_drops(pts, POSE, PARAMS, g, L, R, 30.0)
+    assert [a.tolist() for a, _ in got] == [[0, 1, 14, 3, 4, 5, 6]]
+
+
+def test_pair_drop_takes_the_true_cones_track6(dataset_dir, monkeypatch):
+    """Track 6 at R = 30 m, 10 % false positives, seed 6, pose 28: a false positive 0.72 m
+    from a true cone at a hairpin's apex. The ranker's lane keeps both; a dive that drops two
+    true cones around them instead costs less, and wins the judge, so the lane diverges before
+    20 m. The lane without the false positive costs less still; judged beside the dives
+    (PAIR_DROPS) it wins. Without them it does not."""
+    import clc.solver
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    f = simulate_lap(load_dataset_track(dataset_dir, 6), range_m=30.0, fp_rate=0.1,
+                     seed=6).frame(28)
+    lane = LaneSolver("clc").solve(f.cones, f.pose)
+    assert lane.stats["pair_drops"] >= 1
+    assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
+    monkeypatch.setattr(clc.solver, "PAIR_DROPS", False)
+    off = LaneSolver("clc").solve(f.cones, f.pose)
+    assert off.stats["pair_drops"] == 0
+    assert score_lane(f, off.left, off.right, off.ok, off.closed).critical_tolerant
