@@ -36,7 +36,6 @@ from scipy.spatial import cKDTree
 
 from clc.ranker import get_ranker
 from clc.search import (
-    DUPLICATE_M,
     GRAPHS,
     claim_dive,
     closable,
@@ -101,11 +100,12 @@ TRAPPED_CANDIDATES = 20
 #: The give-up rule's run of infeasible extensions (``enumerate_candidates(stale=...)``).
 STALE_EXTENSIONS = 8
 #: In each dive round, the winner without one cone of a close pair (two consecutive boundary
-#: cones nearer than ``clc.search.DUPLICATE_M`` within the reach; ``clc.search.pair_drops``)
+#: cones nearer than ``PAIR_DROP_M`` within the reach; ``clc.search.pair_drops``)
 #: is judged beside the dives (docs/clc.md, "Close pairs"; ``lane.stats["pair_drops"]``).
 PAIR_DROPS = True
-#: The distance (m) below which two consecutive boundary cones are a close pair.
-PAIR_DROP_M = DUPLICATE_M
+#: The distance (m) below which two consecutive boundary cones are a close pair: 1.5 m, measured
+#: against ``clc.search.DUPLICATE_M`` (1 m) on ten seeds (docs/clc.md, "Close pairs").
+PAIR_DROP_M = 1.5
 #: Drop a closed lane's join cone when the ring is cheaper without it (``drop_ring_join``).
 RING_JOIN = True
 
