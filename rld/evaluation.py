@@ -16,15 +16,12 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from rld.api import LaneSolver
-from rld.metrics import CATEGORIES, score_lane, stability_ratio
+from rld.metrics import CATEGORIES, CRITICAL, score_lane, stability_ratio
 from rld.simulation import simulate_lap
 from rld.tracks import Track
 from rld.types import LaneParams
 
 __all__ = ["PoseRecord", "run_protocol", "summarize", "lap_interval", "STABILITY_RADII_M"]
-
-#: The categories that count as critical failures (DESIGN.md): diverging below 20 m, no lane.
-CRITICAL = frozenset({"diverging_lt20", "failed"})
 
 #: The radii (m) at which the stability ratio of Huang et al. (eq. 5) is recorded.
 STABILITY_RADII_M = (5.0, 10.0, 20.0)

@@ -22,6 +22,7 @@ from rld.simulation import Frame
 
 __all__ = [
     "CATEGORIES",
+    "CRITICAL",
     "CRITICAL_DISTANCE_M",
     "TOLERANT_DISTANCE_M",
     "SideDivergence",
@@ -44,6 +45,8 @@ __all__ = [
 ]
 
 CATEGORIES = ("gt", "near_gt", "too_short", "diverging_ge20", "diverging_lt20", "failed")
+#: The categories that count as critical failures (DESIGN.md): diverging below 20 m, no lane.
+CRITICAL = frozenset({"diverging_lt20", "failed"})
 CRITICAL_DISTANCE_M = 20.0
 TOLERANT_DISTANCE_M = 0.5
 IOU20_HORIZON_M = 20.0
@@ -377,11 +380,11 @@ class PoseScore:
 
     @property
     def critical(self) -> bool:
-        return self.category in ("diverging_lt20", "failed")
+        return self.category in CRITICAL
 
     @property
     def critical_tolerant(self) -> bool:
-        return self.category_tolerant in ("diverging_lt20", "failed")
+        return self.category_tolerant in CRITICAL
 
 
 def score_lane(
