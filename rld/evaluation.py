@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from rld.api import LaneSolver
-from rld.metrics import CATEGORIES, CRITICAL, score_lane, stability_ratio
+from rld.metrics import CATEGORIES, CRITICAL, OFF_LINE_M, score_lane, stability_ratio
 from rld.simulation import simulate_lap
 from rld.tracks import Track
 from rld.types import LaneParams
@@ -61,6 +61,9 @@ class PoseRecord:
     tracked_stability_20: float = math.nan
     seed: int = 0
     """Seed of the lap's false positives (``simulate_lap``)."""
+    deviation20_m: float = math.nan
+    """How far the lane strays from the true boundary lines within 20 m of the car
+    (``rld.metrics.boundary_deviation``, m; inf: no lane). NaN in records written before it."""
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -131,6 +134,7 @@ def run_protocol(
                 iterations=int(lane.stats.get("iterations", -1)),
                 complete=lane.stats.get("complete"),
                 seed=int(seed),
+                deviation20_m=sc.deviation20_m,
                 **stab,
             ))
             if plot_failures and sc.critical:
@@ -171,12 +175,17 @@ def _plot_failure(folder, method, track, frame, lane, sc, range_m, fp_rate, seed
                gt_right=frame.gt_right, false_positive=frame.is_false_positive,
                title=f"{method}, {track}, R {range_m:g} m, FP {fp_rate:.0%} (seed {seed}), "
                      f"pose {frame.index}: {sc.category} (tolerant: {sc.category_tolerant}), "
-                     f"diverges at {sc.divergence_m:.1f} m",
+                     f"diverges at {sc.divergence_m:.1f} m, "
+                     f"{sc.deviation20_m:.1f} m off the lines within 20 m",
                path=str(Path(folder) / f"{name}.png"))
 
 
 def summarize(records: list[PoseRecord]) -> dict:
-    """The protocol's figures for one setting (percentages in %, lengths in m, latency in ms)."""
+    """The protocol's figures for one setting (percentages in %, lengths in m, latency in ms).
+    ``critical_off``: the poses critical by the tolerant rule whose lane also strays more than
+    ``rld.metrics.OFF_LINE_M`` (1 m) from the true boundary lines within 20 m of the car, or
+    that have no lane (ours, beside DESIGN.md's rates: how many critical lanes are far off the
+    track's lines rather than a cone out of order); NaN when a record predates the deviation."""
     n = len(records)
     if n == 0:
         return {"poses": 0}
@@ -186,6 +195,11 @@ def summarize(records: list[PoseRecord]) -> dict:
         out[c] = 100.0 * cats.count(c) / n
     out["critical"] = 100.0 * sum(c in CRITICAL for c in cats) / n
     out["critical_tolerant"] = 100.0 * sum(r.category_tolerant in CRITICAL for r in records) / n
+    if any(math.isnan(r.deviation20_m) for r in records):
+        out["critical_off"] = math.nan
+    else:
+        out["critical_off"] = 100.0 * sum(
+            r.category_tolerant in CRITICAL and r.deviation20_m > OFF_LINE_M for r in records) / n
     iou20 = [r.iou20 for r in records if not math.isnan(r.iou20)]
     out["mean_iou"] = 100.0 * float(np.mean([r.iou for r in records]))
     out["mean_iou20"] = 100.0 * float(np.mean(iou20)) if iou20 else math.nan

@@ -38,6 +38,9 @@ __all__ = [
     "side_divergence",
     "categorize",
     "score_lane",
+    "OFF_LINE_M",
+    "DEVIATION_STEP_M",
+    "boundary_deviation",
     "circle_crossing",
     "stability_ratio",
     "side_agreement",
@@ -50,6 +53,13 @@ CRITICAL = frozenset({"diverging_lt20", "failed"})
 CRITICAL_DISTANCE_M = 20.0
 TOLERANT_DISTANCE_M = 0.5
 IOU20_HORIZON_M = 20.0
+#: A critical lane whose boundaries stray more than this (m) from the true boundary lines within
+#: ``CRITICAL_DISTANCE_M`` of the car counts as off the line (``summarize``'s ``critical_off``):
+#: the car could be led into a cone or off the track, not only past a wrongly ordered one.
+OFF_LINE_M = 1.0
+#: Sampling step (m) of ``boundary_deviation`` along the predicted polylines; the deviation it
+#: returns is within half of it of the exact supremum (distance to a polyline is 1-Lipschitz).
+DEVIATION_STEP_M = 0.1
 #: A true boundary's cone farther than this (m) from the other true boundary lies past the
 #: lane's known end (``true_lane_extent``). It is ``LaneParams.max_width_m``'s default; no cone of
 #: the shared tracks' whole boundaries is farther than 5.75 m from the other boundary.
@@ -377,6 +387,9 @@ class PoseScore:
     divergence_tolerant_m: float
     pred_length_m: float
     true_length_m: float
+    deviation20_m: float = math.nan
+    """How far the predicted boundaries stray from the true boundary lines within 20 m of the
+    car (``boundary_deviation``, metres, the larger side); inf when there is no lane."""
 
     @property
     def critical(self) -> bool:
@@ -406,7 +419,8 @@ def score_lane(
     )
     if not ok:
         mean_true = float(np.mean(true_len))
-        return PoseScore("failed", "failed", 0.0, 0.0, False, 0.0, 0.0, 0.0, mean_true)
+        return PoseScore("failed", "failed", 0.0, 0.0, False, 0.0, 0.0, 0.0, mean_true,
+                         math.inf)
     gl, gr = true_sides(frame)
     iou = lane_iou(cones[left], cones[right], gl, gr, closed, gt_closed, frame.pose.heading)
     iou = 0.0 if math.isnan(iou) else iou
@@ -415,18 +429,22 @@ def score_lane(
         np.array_equal(left, frame.gt_left) and np.array_equal(right, frame.gt_right)
     )
     on_boundary = np.zeros(cones.shape[0], dtype=bool)
+    lines = []  # each side's true boundary line through its mapped cones
     for seq in (frame.left_seq, frame.right_seq):
         on_boundary[seq[seq >= 0]] = True
+        line = cones[seq[seq >= 0]]
+        if frame.closed and line.shape[0] > 2:
+            line = np.vstack([line, line[:1]])
+        lines.append(line)
+    deviation = max(boundary_deviation(cones[pred], line, frame.pose.xy, closed)
+                    for pred, line in ((left, lines[0]), (right, lines[1])))
     results = []
     for tolerant in (False, True):
         sides = []
-        for pred, gt, seq in ((left, frame.gt_left, frame.left_seq),
-                              (right, frame.gt_right, frame.right_seq)):
+        for pred, gt, seq, line in ((left, frame.gt_left, frame.left_seq, lines[0]),
+                                    (right, frame.gt_right, frame.right_seq, lines[1])):
             skip = None
             if tolerant:
-                line = cones[seq[seq >= 0]]
-                if frame.closed and line.shape[0] > 2:
-                    line = np.vstack([line, line[:1]])
                 near = geo.point_polyline_distance(cones, line) <= TOLERANT_DISTANCE_M
                 skip = ~on_boundary & near
             sides.append(side_divergence(pred, gt, seq, cones, frame.pose.xy, frame.closed,
@@ -443,7 +461,65 @@ def score_lane(
         divergence_tolerant_m=results[1][1],
         pred_length_m=float(np.mean(pred_len)),
         true_length_m=float(np.mean(true_len)),
+        deviation20_m=deviation,
     )
+
+
+def boundary_deviation(
+    pred: np.ndarray,
+    line: np.ndarray,
+    car_xy: np.ndarray,
+    closed: bool = False,
+    radius_m: float = CRITICAL_DISTANCE_M,
+    step_m: float = DEVIATION_STEP_M,
+) -> float:
+    """How far the predicted boundary ``pred`` (its cones in order, (k, 2), metres) strays from
+    the true boundary line ``line`` ((m, 2)) within ``radius_m`` of the car: the largest
+    distance to ``line`` of any point of ``pred``'s polyline (closed: with the closing edge)
+    that lies within ``radius_m`` of ``car_xy``. The polyline is sampled every ``step_m`` or
+    finer, so the result is within ``step_m / 2`` of the exact supremum. 0 when no point of
+    ``pred`` lies that near (an empty side), inf when ``line`` is empty and one does.
+
+    Ours, not DESIGN.md's: the divergence rule says where a lane first leaves the true cone
+    order; this says how far the lane is off the true lines, which is what a planner following
+    it would feel. A false positive 0.6 m beside the line that the lane takes is critical
+    by the rule, and 0.6 m off here."""
+    pred = np.asarray(pred, dtype=np.float64).reshape(-1, 2)
+    if pred.shape[0] == 0:
+        return 0.0
+    if closed and pred.shape[0] > 2:
+        pred = np.vstack([pred, pred[:1]])
+    a, b = pred[:-1], pred[1:]
+    seg = np.hypot(*(b - a).T)
+    # Only segments that can reach within radius_m of the car: their nearer end is within
+    # radius_m plus their own length.
+    da = np.hypot(*(a - car_xy).T)
+    keep = da <= radius_m + seg
+    pts = [pred[np.hypot(*(pred - car_xy).T) <= radius_m]]
+    if keep.any():
+        counts = np.maximum(np.ceil(seg[keep] / step_m).astype(np.int64), 1)
+        owner = np.repeat(np.arange(int(keep.sum())), counts)
+        first = np.cumsum(counts) - counts
+        t = (np.arange(int(counts.sum())) - first[owner] + 0.5) / counts[owner]
+        mids = a[keep][owner] + (b[keep] - a[keep])[owner] * t[:, None]
+        pts.append(mids[np.hypot(*(mids - car_xy).T) <= radius_m])
+        # Where the kept segments cross the circle, so that the cut is sampled exactly:
+        # |a + t (b - a) - car|^2 = r^2, t in [0, 1].
+        u, v = a[keep] - car_xy, (b - a)[keep]
+        qa, qb, qc = (v * v).sum(1), 2.0 * (u * v).sum(1), (u * u).sum(1) - radius_m**2
+        disc = qb * qb - 4.0 * qa * qc
+        ok = (qa > 0) & (disc >= 0)
+        root = np.sqrt(np.where(ok, disc, 0.0))
+        for sign in (-1.0, 1.0):
+            t = np.where(ok, (-qb + sign * root) / np.where(ok, 2.0 * qa, 1.0), -1.0)
+            hit = (t >= 0.0) & (t <= 1.0)
+            pts.append(car_xy + u[hit] + v[hit] * t[hit, None])
+    pts = np.vstack(pts)
+    if pts.shape[0] == 0:
+        return 0.0
+    if np.asarray(line).shape[0] == 0:
+        return math.inf
+    return float(geo.point_polyline_distance(pts, line).max())
 
 
 def circle_crossing(line: np.ndarray, center: np.ndarray, radius_m: float) -> np.ndarray | None:

@@ -17,8 +17,10 @@ from hypothesis import strategies as st
 from rld.generator import generate_track
 from rld.metrics import (
     CATEGORIES,
+    DEVIATION_STEP_M,
     PoseScore,
     _from_line,
+    boundary_deviation,
     candidate_ious,
     categorize,
     circle_crossing,
@@ -969,3 +971,83 @@ def test_from_line_through_the_polylines_own_points(pts, i, j):
     np.testing.assert_array_equal(out[-(len(xy) - k):], xy[k:])
     assert out.shape[0] == len(xy) - k + (k > 0)
     assert (out[0] - a) @ n >= -1e-9
+
+
+# --------------------------------------------------------------------------------------------
+# How far a lane strays from the true lines within 20 m (ours, beside DESIGN.md's rules)
+# --------------------------------------------------------------------------------------------
+
+
+def test_deviation_of_the_true_lane_is_zero():
+    left, right = straight(10)
+    h = Hand(left, right)
+    assert h.score(h.L, h.R).deviation20_m == pytest.approx(0.0, abs=1e-12)
+
+
+def test_deviation_hand_worked():
+    left, right = straight(10)  # left line y = 2, cones at x = 3, 6, ..., 30; car at the origin
+    # 0.6 and 1 m beside the left line, between left cones 2 (x = 9) and 3 (x = 12).
+    h = Hand(left, right, extra=[(10.5, 2.6), (10.5, 3.0), (40.0, 9.0)])
+    for k, off in ((0, 0.6), (1, 1.0)):
+        s = h.score(np.concatenate([h.L[:3], h.X[[k]], h.L[3:]]), h.R)
+        # The farthest point is the inserted cone itself: 0.6 / 1.0 m above y = 2.
+        assert s.deviation20_m == pytest.approx(off, abs=1e-9), k
+        assert s.critical_tolerant  # both beyond the tolerant 0.5 m
+    # Instead of left cone 3 (x = 12): the inserted cone is 0.6 m off the line, and the edge
+    # from it to cone 4 (x = 15) is nowhere farther.
+    s = h.score(np.concatenate([h.L[:3], h.X[[0]], h.L[4:]]), h.R)
+    assert s.deviation20_m == pytest.approx(0.6, abs=1e-9)
+    # The sides swapped: every left point is 4 m from the left line (and right from right).
+    assert h.score(h.R, h.L).deviation20_m == pytest.approx(4.0, abs=1e-9)
+    # A jump to (40, 9) from the last left cone (30, 2): beyond 20 m of the car, not counted.
+    assert h.score(np.concatenate([h.L, h.X[[2]]]), h.R).deviation20_m == pytest.approx(
+        0.0, abs=1e-12)
+    # No lane: infinitely far off.
+    assert h.score(h.L, h.R, ok=False).deviation20_m == math.inf
+
+
+def test_deviation_counts_only_the_part_within_the_radius():
+    line = np.array([[0.0, 0.0], [40.0, 0.0]])
+    car = np.zeros(2)
+    # A boundary along y = 0 to x = 16, then to (24, 8): the edge leaves the 20 m circle at
+    # x = 16 + t * 8, y = 8 t with (16 + 8 t)^2 + (8 t)^2 = 400 -> t = 0.2958..., y = 2.366.
+    pred = np.array([[0.0, 0.0], [16.0, 0.0], [24.0, 8.0]])
+    t = (-256 + math.sqrt(256**2 + 4 * 128 * 144)) / (2 * 128)
+    got = boundary_deviation(pred, line, car)
+    assert 8 * t - DEVIATION_STEP_M / 2 <= got <= 8 * t
+    assert boundary_deviation(pred, line, car, radius_m=50.0) == pytest.approx(8.0)
+    assert boundary_deviation(pred[:0], line, car) == 0.0  # an empty side
+    assert boundary_deviation(pred, line[:0], car) == math.inf
+    # Closed: the closing edge (24, 8) -> (0, 0) counts too; its point nearest the car's 20 m
+    # circle edge... within 20 m it rises to 20 * sin(atan(1/3)) = 6.32 m off y = 0.
+    assert boundary_deviation(pred, line, car, closed=True) == pytest.approx(
+        20 * math.sin(math.atan2(8, 24)), abs=DEVIATION_STEP_M / 2)
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.lists(st.tuples(st.floats(-25, 25), st.floats(-25, 25)), min_size=1, max_size=8),
+       st.lists(st.tuples(st.floats(-25, 25), st.floats(-25, 25)), min_size=2, max_size=8))
+def test_deviation_against_dense_sampling(pred, line):
+    pred, line = np.array(pred), np.array(line)
+    car = np.zeros(2)
+    got = boundary_deviation(pred, line, car)
+    # Brute force: the polyline sampled 20 times finer, each sample's distance to every
+    # segment of the line by projection.
+    pts = [pred[0]]
+    for a, b in zip(pred[:-1], pred[1:], strict=True):
+        n = max(int(np.ceil(np.hypot(*(b - a)) / (DEVIATION_STEP_M / 20))), 1)
+        pts += [a + (b - a) * (k / n) for k in range(1, n + 1)]
+    pts = np.array(pts)
+    pts = pts[np.hypot(pts[:, 0], pts[:, 1]) <= 20.0]
+
+    def dist(p):
+        best = math.inf
+        for a, b in zip(line[:-1], line[1:], strict=True):
+            d = b - a
+            t = 0.0 if not d.any() else min(max(float((p - a) @ d / (d @ d)), 0.0), 1.0)
+            best = min(best, float(np.hypot(*(p - a - t * d))))
+        return best
+
+    want = max((dist(p) for p in pts), default=0.0)
+    # Ours samples the cut at the circle exactly; the brute force may miss it by its step.
+    assert want - DEVIATION_STEP_M / 2 - 1e-9 <= got <= want + DEVIATION_STEP_M / 20 + 1e-9

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -221,3 +222,32 @@ def test_seed_table_gives_the_lap_interval():
     (row,) = summaries(recs)
     assert row["critical_tolerant_interval"] == list(lap_interval(recs))
     assert "| 40.00 (40.00 - 40.00) | 20.00 - 60.00 |" in seeds_markdown([row])
+
+
+def test_critical_off_counts_critical_lanes_more_than_a_metre_off():
+    # Ten poses: tolerant-critical ones 0.6 m (a cone out of order, near the line), 1.5 m and
+    # inf (no lane) off; a non-critical one 2 m off (beyond 20 m of arc, say) does not count.
+    recs = [dataclasses.replace(r, deviation20_m=d)
+            for r, d in zip(_lap("a", 0, 10, 3), (0.6, 1.5, math.inf, 2.0) + (0.0,) * 6,
+                            strict=True)]
+    out = summarize(recs)
+    assert out["critical_tolerant"] == pytest.approx(30.0)
+    assert out["critical_off"] == pytest.approx(20.0)
+    # Pooled with a clean lap of the next seed: 2 of 20 poses.
+    clean = [dataclasses.replace(r, deviation20_m=0.0) for r in _lap("a", 1, 10, 0)]
+    (row,) = summaries(recs + clean)
+    assert row["critical_off"] == pytest.approx(10.0)
+    assert seeds_markdown([row]).rstrip().endswith("| 10.00 |")
+    # Records written before the deviation (NaN) make the rate NaN, not a silent 0.
+    assert math.isnan(summarize(_lap("a", 0, 10, 3))["critical_off"])
+
+
+def test_protocol_records_the_deviation():
+    recs = run_protocol([generate_track(3)], method="nearest", range_m=30.0, fp_rate=0.3,
+                        every=25)
+    dev = np.array([r.deviation20_m for r in recs])
+    crit = np.array([r.category_tolerant in ("failed", "diverging_lt20") for r in recs])
+    assert not np.isnan(dev).any() and (dev >= 0).all()
+    assert (dev[[r.category == "failed" for r in recs]] == math.inf).all()
+    want = 100.0 * np.sum(crit & (dev > 1.0)) / len(recs)
+    assert summarize(recs)["critical_off"] == pytest.approx(want)
