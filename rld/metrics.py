@@ -476,9 +476,12 @@ def boundary_deviation(
     """How far the predicted boundary ``pred`` (its cones in order, (k, 2), metres) strays from
     the true boundary line ``line`` ((m, 2)) within ``radius_m`` of the car: the largest
     distance to ``line`` of any point of ``pred``'s polyline (closed: with the closing edge)
-    that lies within ``radius_m`` of ``car_xy``. The polyline is sampled every ``step_m`` or
-    finer, so the result is within ``step_m / 2`` of the exact supremum. 0 when no point of
-    ``pred`` lies that near (an empty side), inf when ``line`` is empty and one does.
+    that lies within ``radius_m`` of ``car_xy``, walking the polyline from its start until it
+    first leaves that circle (``circle_crossing``): the far end of a lane that runs round the
+    loop and back to the car does not count. The polyline is sampled every ``step_m`` or
+    finer, and where it crosses the circle, so the result is within ``step_m / 2`` of the
+    exact supremum. 0 when no point of ``pred`` lies that near (an empty side), inf when
+    ``line`` is empty and one does.
 
     Ours, not DESIGN.md's: the divergence rule says where a lane first leaves the true cone
     order; this says how far the lane is off the true lines, which is what a planner following
@@ -489,20 +492,32 @@ def boundary_deviation(
         return 0.0
     if closed and pred.shape[0] > 2:
         pred = np.vstack([pred, pred[:1]])
+    if pred.shape[0] > 1:  # cut where the walk first leaves the circle (as circle_crossing)
+        p, u = pred[:-1] - car_xy, np.diff(pred, axis=0)
+        qa, qb, qc = (u * u).sum(1), 2.0 * (p * u).sum(1), (p * p).sum(1) - radius_m**2
+        disc = qb * qb - 4.0 * qa * qc
+        ok = (qa > 0) & (disc > 0)
+        root, den = np.sqrt(np.where(ok, disc, 0.0)), np.where(ok, 2.0 * qa, 1.0)
+        t1, t2 = (-qb - root) / den, (-qb + root) / den
+        leave = ok & (t2 > 0.0) & (t2 <= 1.0 + 1e-12) & (np.maximum(t1, 0.0) < t2)
+        if leave.any():
+            i = int(np.argmax(leave))
+            pred = np.vstack([pred[: i + 1], pred[i] + min(float(t2[i]), 1.0) * u[i]])
     a, b = pred[:-1], pred[1:]
     seg = np.hypot(*(b - a).T)
     # Only segments that can reach within radius_m of the car: their nearer end is within
     # radius_m plus their own length.
     da = np.hypot(*(a - car_xy).T)
     keep = da <= radius_m + seg
-    pts = [pred[np.hypot(*(pred - car_xy).T) <= radius_m]]
+    inside = radius_m + 1e-9  # the cut point lies on the circle, up to rounding
+    pts = [pred[np.hypot(*(pred - car_xy).T) <= inside]]
     if keep.any():
         counts = np.maximum(np.ceil(seg[keep] / step_m).astype(np.int64), 1)
         owner = np.repeat(np.arange(int(keep.sum())), counts)
         first = np.cumsum(counts) - counts
         t = (np.arange(int(counts.sum())) - first[owner] + 0.5) / counts[owner]
         mids = a[keep][owner] + (b[keep] - a[keep])[owner] * t[:, None]
-        pts.append(mids[np.hypot(*(mids - car_xy).T) <= radius_m])
+        pts.append(mids[np.hypot(*(mids - car_xy).T) <= inside])
         # Where the kept segments cross the circle, so that the cut is sampled exactly:
         # |a + t (b - a) - car|^2 = r^2, t in [0, 1].
         u, v = a[keep] - car_xy, (b - a)[keep]

@@ -1018,10 +1018,25 @@ def test_deviation_counts_only_the_part_within_the_radius():
     assert boundary_deviation(pred, line, car, radius_m=50.0) == pytest.approx(8.0)
     assert boundary_deviation(pred[:0], line, car) == 0.0  # an empty side
     assert boundary_deviation(pred, line[:0], car) == math.inf
-    # Closed: the closing edge (24, 8) -> (0, 0) counts too; its point nearest the car's 20 m
-    # circle edge... within 20 m it rises to 20 * sin(atan(1/3)) = 6.32 m off y = 0.
-    assert boundary_deviation(pred, line, car, closed=True) == pytest.approx(
-        20 * math.sin(math.atan2(8, 24)), abs=DEVIATION_STEP_M / 2)
+    # Closed: the closing edge (24, 8) -> (0, 0) comes back into the circle, 6.32 m off y = 0
+    # where it enters, but only after the walk from the start has left it: not counted.
+    assert boundary_deviation(pred, line, car, closed=True) == pytest.approx(got)
+    # Started at (24, 8), the walk is the closing edge first: inside from 20 m of the car,
+    # 20 sin(atan(1/3)) = 6.32 m off at the entry, then along y = 0, and it leaves at x = 20.
+    assert boundary_deviation(pred[[2, 0, 1]], line, car, closed=True) == pytest.approx(
+        20 * math.sin(math.atan2(8, 24)), abs=1e-9)
+
+
+def test_deviation_ignores_the_far_end_of_a_lane_that_loops_back():
+    # A loop round a 30 x 10 m rectangle of true cones, the car at its start: the lane follows
+    # the loop and ends with a jump 3 m off the line, 2 m from the car, after 80 m of lane.
+    line = np.array([[0.0, 0.0], [30.0, 0.0], [30.0, 10.0], [0.0, 10.0], [0.0, 0.0]])
+    pred = np.array([[1.0, 0.0], [30.0, 0.0], [30.0, 10.0], [0.0, 10.0], [0.0, 3.0],
+                     [-2.0, 0.5]])
+    car = np.array([0.5, 0.0])
+    assert boundary_deviation(pred, line, car) == pytest.approx(0.0, abs=1e-12)
+    # Reversed, the jump comes first: (-2, 0.5) is 2 m from the line's side x = 0.
+    assert boundary_deviation(pred[::-1], line, car) == pytest.approx(2.0, abs=1e-9)
 
 
 @settings(max_examples=100, deadline=None)
@@ -1038,6 +1053,10 @@ def test_deviation_against_dense_sampling(pred, line):
         n = max(int(np.ceil(np.hypot(*(b - a)) / (DEVIATION_STEP_M / 20))), 1)
         pts += [a + (b - a) * (k / n) for k in range(1, n + 1)]
     pts = np.array(pts)
+    inside = np.hypot(pts[:, 0], pts[:, 1]) <= 20.0
+    # The walk stops where it first leaves the circle.
+    out = np.flatnonzero(inside[:-1] & ~inside[1:])
+    pts = pts[: out[0] + 1] if out.size else pts
     pts = pts[np.hypot(pts[:, 0], pts[:, 1]) <= 20.0]
 
     def dist(p):
