@@ -177,7 +177,9 @@ def seeds_markdown(rows: list[dict]) -> str:
 
 def table_markdown(rows: list[dict]) -> str:
     """One table per (method, range), rows per false-positive rate, columns as the CLC paper's
-    Table I plus the tolerant critical rate, IoU20, lengths and latency."""
+    Table I plus the tolerant critical rate, the poses of it whose lane is more than 1 m off
+    the true lines within 20 m (``summarize``'s ``critical_off``; "-" for records that
+    predate it), IoU20, lengths and latency."""
     parts = []
     keys = []
     for row in rows:
@@ -187,17 +189,21 @@ def table_markdown(rows: list[dict]) -> str:
         parts.append(f"**{method}, R = {rng:g} m**\n")
         parts.append("| FP | poses | GT % | near-GT % | too short % | diverging >= 20 m % | "
                      "diverging < 20 m % | failed % | success % | critical % (tolerant) | "
+                     "critical, > 1 m off % | "
                      "mean IoU % | IoU20 % | pred / true length (m) | median / p95 latency (ms) |")
-        parts.append("|" + "---|" * 14)
+        parts.append("|" + "---|" * 15)
         for r in rows:
             if (r["method"], r["range_m"]) != (method, rng):
                 continue
             success = r["gt"] + r["near_gt"] + r["too_short"] + r["diverging_ge20"]
+            off = r.get("critical_off", math.nan)
+            off = "-" if math.isnan(off) else f"{off:.1f}"
             parts.append(
                 f"| {r['fp_rate']:.0%} | {r['poses']} | {r['gt']:.1f} | {r['near_gt']:.1f} | "
                 f"{r['too_short']:.1f} | {r['diverging_ge20']:.1f} | {r['diverging_lt20']:.1f} "
                 f"| {r['failed']:.1f} | {success:.1f} | {r['critical']:.1f} "
-                f"({r['critical_tolerant']:.1f}) | {r['mean_iou']:.1f} | {r['mean_iou20']:.1f} "
+                f"({r['critical_tolerant']:.1f}) | {off} | {r['mean_iou']:.1f} | "
+                f"{r['mean_iou20']:.1f} "
                 f"| {r['pred_length_m']:.0f} / {r['true_length_m']:.0f} | "
                 f"{r['latency_median_ms']:.1f} / {r['latency_p95_ms']:.1f} |")
         parts.append("")

@@ -21,6 +21,7 @@ from rld.report import (
     parse_method,
     seeds_markdown,
     summaries,
+    table_markdown,
     write_outputs,
 )
 
@@ -240,6 +241,9 @@ def test_critical_off_counts_critical_lanes_more_than_a_metre_off():
     assert seeds_markdown([row]).rstrip().endswith("| 10.00 |")
     # Records written before the deviation (NaN) make the rate NaN, not a silent 0.
     assert math.isnan(summarize(_lap("a", 0, 10, 3))["critical_off"])
+    # The main table: the tolerant rate, then the share of poses more than 1 m off.
+    assert "| 15.0 (15.0) | 10.0 | 100.0 |" in table_markdown([row])
+    assert "| 30.0 (30.0) | - | 100.0 |" in table_markdown(summaries(_lap("a", 0, 10, 3)))
 
 
 def test_protocol_records_the_deviation():
