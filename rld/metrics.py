@@ -488,21 +488,15 @@ def boundary_deviation(
     it would feel. A false positive 0.6 m beside the line that the lane takes is critical
     by the rule, and 0.6 m off here."""
     pred = np.asarray(pred, dtype=np.float64).reshape(-1, 2)
+    car_xy = np.asarray(car_xy, dtype=np.float64)
     if pred.shape[0] == 0:
         return 0.0
     if closed and pred.shape[0] > 2:
         pred = np.vstack([pred, pred[:1]])
-    if pred.shape[0] > 1:  # cut where the walk first leaves the circle (as circle_crossing)
-        p, u = pred[:-1] - car_xy, np.diff(pred, axis=0)
-        qa, qb, qc = (u * u).sum(1), 2.0 * (p * u).sum(1), (p * p).sum(1) - radius_m**2
-        disc = qb * qb - 4.0 * qa * qc
-        ok = (qa > 0) & (disc > 0)
-        root, den = np.sqrt(np.where(ok, disc, 0.0)), np.where(ok, 2.0 * qa, 1.0)
-        t1, t2 = (-qb - root) / den, (-qb + root) / den
-        leave = ok & (t2 > 0.0) & (t2 <= 1.0 + 1e-12) & (np.maximum(t1, 0.0) < t2)
-        if leave.any():
-            i = int(np.argmax(leave))
-            pred = np.vstack([pred[: i + 1], pred[i] + min(float(t2[i]), 1.0) * u[i]])
+    exit_ = _first_exit(pred, car_xy, radius_m)
+    if exit_ is not None:  # the walk stops where it first leaves the circle
+        i, t = exit_
+        pred = np.vstack([pred[: i + 1], pred[i] + t * (pred[i + 1] - pred[i])])
     a, b = pred[:-1], pred[1:]
     seg = np.hypot(*(b - a).T)
     # Only segments that can reach within radius_m of the car: their nearer end is within
@@ -518,17 +512,11 @@ def boundary_deviation(
         t = (np.arange(int(counts.sum())) - first[owner] + 0.5) / counts[owner]
         mids = a[keep][owner] + (b[keep] - a[keep])[owner] * t[:, None]
         pts.append(mids[np.hypot(*(mids - car_xy).T) <= inside])
-        # Where the kept segments cross the circle, so that the cut is sampled exactly:
-        # |a + t (b - a) - car|^2 = r^2, t in [0, 1].
-        u, v = a[keep] - car_xy, (b - a)[keep]
-        qa, qb, qc = (v * v).sum(1), 2.0 * (u * v).sum(1), (u * u).sum(1) - radius_m**2
-        disc = qb * qb - 4.0 * qa * qc
-        ok = (qa > 0) & (disc >= 0)
-        root = np.sqrt(np.where(ok, disc, 0.0))
-        for sign in (-1.0, 1.0):
-            t = np.where(ok, (-qb + sign * root) / np.where(ok, 2.0 * qa, 1.0), -1.0)
-            hit = (t >= 0.0) & (t <= 1.0)
-            pts.append(car_xy + u[hit] + v[hit] * t[hit, None])
+        # Where the kept segments cross the circle, so that the cut is sampled exactly.
+        ok, t1, t2 = _circle_roots(a[keep] - car_xy, (b - a)[keep], radius_m)
+        for t in (t1, t2):
+            hit = ok & (t >= 0.0) & (t <= 1.0)
+            pts.append(a[keep][hit] + (b - a)[keep][hit] * t[hit, None])
     pts = np.vstack(pts)
     if pts.shape[0] == 0:
         return 0.0
@@ -543,23 +531,39 @@ def circle_crossing(line: np.ndarray, center: np.ndarray, radius_m: float) -> np
     circle). A segment may start outside, pass through the circle and leave it; a tangent
     touch does not count. ``None`` when it never leaves the circle."""
     line = np.asarray(line, dtype=np.float64)
+    exit_ = _first_exit(line, np.asarray(center, dtype=np.float64), radius_m)
+    if exit_ is None:
+        return None
+    i, t = exit_
+    return line[i] + t * (line[i + 1] - line[i])
+
+
+def _circle_roots(p: np.ndarray, u: np.ndarray, radius_m: float):
+    """Where the segments ``p + t u`` (p relative to the circle's centre, (k, 2) each) meet the
+    circle of ``radius_m``: ``ok`` (the line through the segment cuts it in two points) and the
+    two roots ``t1 < t2`` of |p + t u|^2 = r^2 (inside for t in (t1, t2))."""
+    qa, qb, qc = (u * u).sum(1), 2.0 * (p * u).sum(1), (p * p).sum(1) - radius_m**2
+    disc = qb * qb - 4.0 * qa * qc
+    ok = (qa > 0) & (disc > 0)
+    root, den = np.sqrt(np.where(ok, disc, 0.0)), np.where(ok, 2.0 * qa, 1.0)
+    return ok, (-qb - root) / den, (-qb + root) / den
+
+
+def _first_exit(line: np.ndarray, center: np.ndarray, radius_m: float
+                ) -> tuple[int, float] | None:
+    """The segment ``i`` and parameter ``t`` in (0, 1] where the polyline ``line``, walked from
+    its start, first leaves the circle (``circle_crossing``), or None."""
     if line.shape[0] < 2:
         return None
-    for i in range(line.shape[0] - 1):
-        p = line[i] - center
-        u = line[i + 1] - line[i]
-        a, b, c = u @ u, 2 * (p @ u), p @ p - radius_m**2
-        disc = b * b - 4 * a * c
-        if a == 0 or disc <= 0:
-            continue
-        t1 = (-b - math.sqrt(disc)) / (2 * a)
-        t2 = (-b + math.sqrt(disc)) / (2 * a)
-        # The segment is inside the circle for t in (t1, t2); it leaves at t2 if that is on
-        # the segment and some part of the segment before it is inside.
-        # (t2 may exceed 1 by a rounding error when the segment ends on the circle.)
-        if 0.0 < t2 <= 1.0 + 1e-12 and max(t1, 0.0) < t2:
-            return line[i] + min(t2, 1.0) * u
-    return None
+    u = np.diff(line, axis=0)
+    ok, t1, t2 = _circle_roots(line[:-1] - center, u, radius_m)
+    # A segment leaves at t2 if that is on the segment and some part of it before is inside
+    # (t2 may exceed 1 by a rounding error when the segment ends on the circle).
+    leave = ok & (t2 > 0.0) & (t2 <= 1.0 + 1e-12) & (np.maximum(t1, 0.0) < t2)
+    if not leave.any():
+        return None
+    i = int(np.argmax(leave))
+    return i, min(float(t2[i]), 1.0)
 
 
 def stability_ratio(
