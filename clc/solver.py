@@ -340,19 +340,13 @@ class ClcModel:
                                   stopped)
                 n_jogs += len(jogs)
                 dives += jogs
-            best, best_cost = None, cost
             drops = (pair_drops(points, pose, p, res.graph, left, right, DIVE_REACH_M,
                                 PAIR_DROP_M)
                      if PAIR_DROPS and not winner[2] else [])
             n_pairs += len(drops)
-            for a, b in drops:
-                if cost is None:
-                    cost = best_cost = dive_cost(points, pose, p, *winner[:3])
-                dc = dive_cost(points, pose, p, a, b)
-                if dc < best_cost:  # ties: the earlier lane
-                    f = ranking_features(points[a], points[b])[None, :]
-                    sc = float(self.ranker.score(points, pose, p, [(a, b, False)], f)[0])
-                    best, best_cost = (a, b, False, sc), dc
+            # The lanes the judge weighs against the winner, in order (ties: the earlier lane):
+            # the pair drops (scored by the ranker only if one wins), then each dive's best.
+            contenders: list[tuple] = [(a, b, False, None) for a, b in drops]
             for dive in dives:
                 n_dives += 1
                 iterations += dive.iterations
@@ -361,12 +355,17 @@ class ClcModel:
                 s = np.asarray(self.ranker.score(points, pose, p, dive.candidates,
                                                  dive.features), dtype=np.float64)
                 k = int(np.argmax(s))
-                a, b, c = dive.candidates[k]
+                contenders.append((*dive.candidates[k], float(s[k])))
+            best, best_cost = None, cost
+            for a, b, c, sc in contenders:
                 if cost is None:
                     cost = best_cost = dive_cost(points, pose, p, *winner[:3])
                 dc = dive_cost(points, pose, p, a, b, c)
-                if dc < best_cost:  # ties: the earlier lane
-                    best, best_cost = (a.copy(), b.copy(), c, float(s[k])), dc
+                if dc < best_cost:
+                    if sc is None:
+                        f = ranking_features(points[a], points[b])[None, :]
+                        sc = float(self.ranker.score(points, pose, p, [(a, b, c)], f)[0])
+                    best, best_cost = (a.copy(), b.copy(), c, sc), dc
             if best is None:
                 break
             winner, cost = best, best_cost
