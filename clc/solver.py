@@ -52,6 +52,7 @@ from rld.constraints import lane_is_feasible, starting_vertex_pairs
 from rld.costs import (
     lane_cost,
     ranking_features,
+    turn_roughness,
     width_roughness,
     width_second_differences,
     within_radius,
@@ -117,12 +118,19 @@ def dive_cost(points: np.ndarray, pose: Pose, params: LaneParams, left: np.ndarr
     ``params.w_width_roughness`` times the width roughness (``rld.costs.width_roughness``, ours)
     of the same part of each boundary (``within_radius``). The roughness tells a true cone from
     a false positive 0.6-1.5 m beside it when both make equally smooth lines: the false one
-    jogs the width (measured in ``LaneParams.w_width_roughness``)."""
+    jogs the width (measured in ``LaneParams.w_width_roughness``). Since 2026-12-03 also
+    ``params.w_turn_roughness`` times the turn roughness of both boundaries' same parts
+    (``rld.costs.turn_roughness``, ours): a false positive inserted between two true cones
+    zigzags the boundary's turns without jogging the width much."""
     cost = lane_cost(points, left, right, pose, params, closed=closed, radius_m=DIVE_REACH_M)
-    if params.w_width_roughness:
+    if params.w_width_roughness or params.w_turn_roughness:
         a = within_radius(points, left, pose, DIVE_REACH_M)
         b = within_radius(points, right, pose, DIVE_REACH_M)
-        cost += params.w_width_roughness * width_roughness(points[a], points[b])
+        if params.w_width_roughness:
+            cost += params.w_width_roughness * width_roughness(points[a], points[b])
+        if params.w_turn_roughness:
+            cost += params.w_turn_roughness * (turn_roughness(points[a])
+                                               + turn_roughness(points[b]))
     return cost
 
 

@@ -1,7 +1,9 @@
-"""numba kernels of the CLC ranking features (Ivanov & Markgraf 2024, section VII).
+"""numba kernels of the CLC ranking features (Ivanov & Markgraf 2024, section VII) and of the
+turn roughness of CLC's dive judge (ours).
 
-Called only through ``rld.costs.ranking_features``; plain float64 arrays in, the (8,) feature
-vector filled in place, nothing of numba leaks out. Turn angles come from the shared kernel
+Called only through ``rld.costs.ranking_features`` and ``rld.costs.turn_roughness``; plain
+float64 arrays in, the (8,) feature vector filled in place (a float out for the roughness),
+nothing of numba leaks out. Turn angles come from the shared kernel
 ``rld.geometry_kernels.turn_angle``, so a turn means the same here as in C_seg (CLC eq. 15) and
 in RLD's angle cost (eq. 20). Variances are population variances computed in two passes (mean
 first, then the mean squared deviation, as ``numpy.var``), 0 for fewer than two values.
@@ -49,6 +51,22 @@ def _turn(xy, k, i):
     a = (i - 1) % k
     c = (i + 1) % k
     return turn_angle(xy[a, 0], xy[a, 1], xy[i, 0], xy[i, 1], xy[c, 0], xy[c, 1])
+
+
+@njit(cache=True)
+def turn_roughness(xy):
+    """Sum of the squared differences (rad^2) of consecutive signed turns at the interior
+    vertices 1..k-2 of the open polyline ``xy`` (k, 2); 0 for k < 4."""
+    k = xy.shape[0]
+    total = 0.0
+    if k < 4:
+        return total
+    prev = _turn(xy, k, 1)
+    for i in range(2, k - 1):
+        t = _turn(xy, k, i)
+        total += (t - prev) * (t - prev)
+        prev = t
+    return total
 
 
 @njit(cache=True)

@@ -763,7 +763,9 @@ def test_skipped_cone_dive_mends_track3(dataset_dir):
     decider's margin did not flag it). The skipped-cone dive takes it and RLD's objective
     prefers that lane: the first strict divergence moves from that cone (13.1 m) to a later one
     (17.1 m). The false positive lies on the line beside the skipped cone, so since 2026-12-02
-    the tolerant rule forgives both lanes (it stands in for the cone; docs/protocol.md)."""
+    the tolerant rule forgives both lanes (it stands in for the cone; docs/protocol.md). The
+    turn roughness (2026-12-03, ``w_turn_roughness``) is off here, to test the dive alone: with
+    it the judge settles on a third lane, strictly diverging at 14.7 m, tolerantly at none."""
     from rld.metrics import score_lane
     from rld.simulation import simulate_lap
     from rld.tracks import load_dataset_track
@@ -771,11 +773,16 @@ def test_skipped_cone_dive_mends_track3(dataset_dir):
     f = lap.frame(150)
     scores = []
     for tol in (0.0, PARAMS.skipped_cone_m):
-        lane = LaneSolver("clc", params=LaneParams(skipped_cone_m=tol)).solve(f.cones, f.pose)
+        params = LaneParams(skipped_cone_m=tol, w_turn_roughness=0.0)
+        lane = LaneSolver("clc", params=params).solve(f.cones, f.pose)
         scores.append(score_lane(f, lane.left, lane.right, lane.ok, lane.closed))
     assert scores[0].divergence_m == pytest.approx(13.07, abs=0.01)
     assert scores[1].divergence_m == pytest.approx(17.12, abs=0.01)
     assert not scores[0].critical_tolerant and not scores[1].critical_tolerant
+    lane = LaneSolver("clc").solve(f.cones, f.pose)
+    default = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
+    assert default.divergence_m == pytest.approx(14.67, abs=0.01)
+    assert not default.critical_tolerant
 
 
 def test_drop_detours_mends_track6(dataset_dir, monkeypatch):
@@ -887,7 +894,9 @@ def test_dive_judge_width_roughness_track3(dataset_dir):
     """Track 3 at R = 30 m, no false positives, pose 5: judged by RLD's objective alone, the
     dives settle on a left boundary that skips the true cone 6 (cheaper by 0.04); the skip
     jogs the lane's width, and with the width roughness (``w_width_roughness``, the default)
-    the judge keeps the cone and the lane no longer diverges before 20 m."""
+    the judge keeps the cone and the lane no longer diverges before 20 m. The turn roughness
+    (``w_turn_roughness``) is off in both, so the width roughness is shown to mend it alone;
+    with both (the defaults) the cone is kept too."""
     from clc.solver import dive_cost
     from rld.metrics import score_lane
     from rld.simulation import simulate_lap
@@ -895,12 +904,42 @@ def test_dive_judge_width_roughness_track3(dataset_dir):
     f = simulate_lap(load_dataset_track(dataset_dir, 3), range_m=30.0, fp_rate=0.0,
                      seed=0).frame(5)
     assert PARAMS.w_width_roughness > 0
-    off_params = dataclasses.replace(PARAMS, w_width_roughness=0.0)
-    on = LaneSolver("clc", PARAMS).solve(f.cones, f.pose)
+    on_params = dataclasses.replace(PARAMS, w_turn_roughness=0.0)
+    off_params = dataclasses.replace(on_params, w_width_roughness=0.0)
+    on = LaneSolver("clc", on_params).solve(f.cones, f.pose)
     off = LaneSolver("clc", off_params).solve(f.cones, f.pose)
     assert not score_lane(f, on.left, on.right, on.ok, on.closed).critical_tolerant
     assert score_lane(f, off.left, off.right, off.ok, off.closed).critical_tolerant
     assert 6 in on.left.tolist() and 6 not in off.left.tolist()
+    assert dive_cost(f.cones, f.pose, off_params, off.left, off.right, off.closed) < \
+        dive_cost(f.cones, f.pose, off_params, on.left, on.right, on.closed)
+    assert dive_cost(f.cones, f.pose, on_params, on.left, on.right, on.closed) < \
+        dive_cost(f.cones, f.pose, on_params, off.left, off.right, off.closed)
+    both = LaneSolver("clc", PARAMS).solve(f.cones, f.pose)
+    assert 6 in both.left.tolist()
+
+
+def test_dive_judge_turn_roughness_track4(dataset_dir):
+    """Track 4 at R = 30 m, 10 % false positives, seed 6, pose 160: judged without the turn
+    roughness, the lane takes a false positive inserted between two true cones of the right
+    boundary (0.5-0.6 m off their line), cheaper by 1.2 than the true lane, and diverges
+    before 20 m. The insertion zigzags the boundary's turns; with the turn roughness
+    (``w_turn_roughness``, the default) the judge keeps the true lane."""
+    from clc.solver import dive_cost
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    f = simulate_lap(load_dataset_track(dataset_dir, 4), range_m=30.0, fp_rate=0.1,
+                     seed=6).frame(160)
+    assert PARAMS.w_turn_roughness > 0
+    off_params = dataclasses.replace(PARAMS, w_turn_roughness=0.0)
+    on = LaneSolver("clc", PARAMS).solve(f.cones, f.pose)
+    off = LaneSolver("clc", off_params).solve(f.cones, f.pose)
+    assert not score_lane(f, on.left, on.right, on.ok, on.closed).critical_tolerant
+    assert score_lane(f, off.left, off.right, off.ok, off.closed).critical_tolerant
+    inserted = [int(i) for i in off.right if f.is_false_positive[i]]
+    assert len(inserted) == 1 and inserted[0] not in on.right.tolist()
+    assert not f.is_false_positive[on.left].any() and not f.is_false_positive[on.right].any()
     assert dive_cost(f.cones, f.pose, off_params, off.left, off.right, off.closed) < \
         dive_cost(f.cones, f.pose, off_params, on.left, on.right, on.closed)
     assert dive_cost(f.cones, f.pose, PARAMS, on.left, on.right, on.closed) < \
