@@ -47,6 +47,7 @@ from clc.search import (
     merge_results,
     pair_drops,
     path_ahead,
+    skip_inserts,
 )
 from rld.constraints import lane_is_feasible, starting_vertex_pairs
 from rld.costs import (
@@ -107,6 +108,14 @@ PAIR_DROPS = True
 #: The distance (m) below which two consecutive boundary cones are a close pair: 1.5 m, measured
 #: against ``clc.search.DUPLICATE_M`` (1 m) on ten seeds (docs/clc.md, "Close pairs").
 PAIR_DROP_M = 1.5
+#: In each dive round, the winner with a skipped cone taken in (``clc.search.skip_inserts``)
+#: is judged beside the dives (docs/clc.md, "Skipped cones taken in";
+#: ``lane.stats["skip_inserts"]``).
+SKIP_INSERTS = True
+#: A complete enumeration's pick is judged too, against its local edits only (the pair drops
+#: and the skipped cones taken in): a dive could only find a lane the ranker has already seen
+#: (docs/clc.md, "Skipped cones taken in").
+JUDGE_COMPLETE = True
 #: Drop a closed lane's join cone when the ring is cheaper without it (``drop_ring_join``).
 RING_JOIN = True
 
@@ -284,7 +293,7 @@ class ClcModel:
             return merge_results(res, again), True
         return res, False
 
-    def _dive_rounds(self, points, pose, res, winner, deadline=math.inf):
+    def _dive_rounds(self, points, pose, res, winner, deadline=math.inf, search=True):
         """The contested-choice dives (``clc.search.contested_dives``) around ``winner``
         (left, right, closed, score), in rounds: the ranker's pick of every dive is a finalist
         beside the winner; they differ from it at a close call and are about as long, so the
@@ -312,14 +321,16 @@ class ClcModel:
         Each round also judges the winner without one cone of each close pair within the reach
         (``clc.search.pair_drops``, PAIR_DROPS; open winners only): a false positive beside a
         true cone makes a short edge that the dives otherwise escape by dropping a true cone
-        elsewhere.
+        elsewhere; and the winner with each skipped cone taken in (``clc.search.skip_inserts``,
+        SKIP_INSERTS; open winners only). ``search=False`` (a complete enumeration,
+        JUDGE_COMPLETE) runs no dive: only these local edits are judged.
         Returns the final (left, right, closed, score), the dives run, their iterations, the
         rounds run (a round that changes nothing ends them), the rounds whose winner was
-        short, the jog dives among the dives, the pair-drop lanes judged, and whether the
-        deadline stopped them."""
+        short, the jog dives among the dives, the pair-drop lanes judged, the skip-insert
+        lanes judged, and whether the deadline stopped them."""
         p = self.params
         done: set[tuple] = set()
-        n_dives = iterations = rounds = short_rounds = n_jogs = n_pairs = 0
+        n_dives = iterations = rounds = short_rounds = n_jogs = n_pairs = n_inserts = 0
         cost = None  # the winner's, computed once a dive has a lane to compare
         # Whether the map reaches beyond SHORT_LANE_M (_short): found at most once per call,
         # when a winner is short (it does not depend on the winner; 9 us on a 409-cone map).
@@ -333,17 +344,20 @@ class ClcModel:
             rounds += 1
             left, right = winner[0], winner[1]
             budget = DIVE_ITERATIONS + left.size + right.size
-            dives = contested_dives(points, pose, p, res.graph, res.start, left, right,
-                                    p.contested_margin, DIVE_REACH_M, budget, skip=done,
-                                    deadline=deadline, stopped=stopped)
-            if SHORT_LANE_M > 0 and _short(points, pose, left, right, SHORT_LANE_M, beyond):
+            dives = []
+            if search:
+                dives = contested_dives(points, pose, p, res.graph, res.start, left, right,
+                                        p.contested_margin, DIVE_REACH_M, budget, skip=done,
+                                        deadline=deadline, stopped=stopped)
+            if search and SHORT_LANE_M > 0 and _short(points, pose, left, right, SHORT_LANE_M,
+                                                      beyond):
                 # A short winner: also every choice within the reach, both boundaries rebuilt.
                 short_rounds += 1
                 dives += contested_dives(points, pose, p, res.graph, res.start, left, right,
                                          np.inf, DIVE_REACH_M, budget, skip=done,
                                          cut_other=True, deadline=deadline,
                                          stopped=stopped)
-            if JOG_DIVES > 0:
+            if search and JOG_DIVES > 0:
                 jogs = _jog_dives(points, pose, p, res, left, right, budget, done, deadline,
                                   stopped)
                 n_jogs += len(jogs)
@@ -352,8 +366,13 @@ class ClcModel:
                                 PAIR_DROP_M)
                      if PAIR_DROPS and not winner[2] else [])
             n_pairs += len(drops)
+            if SKIP_INSERTS and not winner[2]:
+                inserts = skip_inserts(points, pose, p, res.graph, left, right, DIVE_REACH_M)
+                n_inserts += len(inserts)
+                drops += inserts
             # The lanes the judge weighs against the winner, in order (ties: the earlier lane):
-            # the pair drops (scored by the ranker only if one wins), then each dive's best.
+            # the pair drops, the skip inserts (each scored by the ranker only if it wins),
+            # then each dive's best.
             contenders: list[tuple] = [(a, b, False, None) for a, b in drops]
             for dive in dives:
                 n_dives += 1
@@ -377,7 +396,7 @@ class ClcModel:
             if best is None:
                 break
             winner, cost = best, best_cost
-        return (*winner, n_dives, iterations, rounds, short_rounds, n_jogs, n_pairs,
+        return (*winner, n_dives, iterations, rounds, short_rounds, n_jogs, n_pairs, n_inserts,
                 cut or bool(stopped))
 
     def solve(self, points: np.ndarray, pose: Pose, colors=None, time_limit_s=None,
@@ -449,14 +468,17 @@ class ClcModel:
         left, right, closed = res.candidates[best]
         left, right = left.copy(), right.copy()
         score = float(scores[best])
-        n_dives = rounds = short_rounds = n_jogs = n_pairs = 0
-        if not res.complete and self.params.contested_margin > 0:
+        n_dives = rounds = short_rounds = n_jogs = n_pairs = n_inserts = 0
+        if (not res.complete or JUDGE_COMPLETE) and self.params.contested_margin > 0:
             (left, right, closed, score, n_dives, it, rounds, short_rounds, n_jogs, n_pairs,
-             cut) = self._dive_rounds(points, pose, res, (left, right, closed, score), deadline)
+             n_inserts, cut) = self._dive_rounds(points, pose, res,
+                                                 (left, right, closed, score), deadline,
+                                                 search=not res.complete)
             stats["cut_short"] |= cut
             iterations += it
         stats.update(dives=n_dives, dive_rounds=rounds, short_lane_rounds=short_rounds,
-                     jog_dives=n_jogs, pair_drops=n_pairs, iterations=iterations)
+                     jog_dives=n_jogs, pair_drops=n_pairs, skip_inserts=n_inserts,
+                     iterations=iterations)
         stats["dropped"] = 0
         if not res.complete and not closed and DROP_DETOURS:
             left, right, stats["dropped"] = drop_detours(points, pose, self.params, res.graph,

@@ -271,7 +271,8 @@ class LaneParams:
     / 24.24 at 0 / 10 / 30 / 50 % false positives with 0.4; R = 50 m unchanged (0.15 / 0.29
     / 2.55 / 11.14, strict too). 0.3 changed nothing; 0.5 gave the same at R = 30 m but put
     false positives 0.45 m off the line into lanes at R = 50 m (strict 6.84 -> 7.57 % at 10
-    %), 1.0 was worse at 30 %."""
+    %), 1.0 was worse at 30 %. Since 2026-12-03 the dive judge also weighs the lane with the
+    skipped cone taken in (``clc.search.skip_inserts``, docs/clc.md)."""
     start_pairs: int = 4
     """How many start pairs CLC tries, most symmetric first (IV-C), when a pair has no feasible
     path pair with ``clc.solver.MIN_START_DEPTH`` (5) cones a side: the search runs from the

@@ -30,6 +30,7 @@ from clc.search import (
     path_ahead,
     ring_join_change,
     search_graph,
+    skip_inserts,
 )
 from rld import LaneParams, LaneSolver, LaneStatus, Pose, solve_lane
 from rld.constraints import c_seg, find_starting_vertices, lane_is_feasible
@@ -863,13 +864,16 @@ def test_dive_judge_counts_within_the_reach_track4(dataset_dir, monkeypatch):
     1.2 m after the one before it, and the first search skips it. The dive that takes it builds
     one left cone fewer at 28.7 m, past the 25 m reach. Judged over the whole lanes the skip
     wins by that cone's benefit (-44.54 against -43.56); within 25 m of the car the lane with
-    the cone wins (-41.11 against -39.99), and the lane no longer diverges before 20 m."""
+    the cone wins (-41.11 against -39.99), and the lane no longer diverges before 20 m. The
+    skip inserts (2026-12-03) are off here, to test the reach alone: the lane with the cone
+    taken in beats the skip even over the whole lanes."""
     import clc.solver
     from rld.metrics import score_lane
     from rld.simulation import simulate_lap
     from rld.tracks import load_dataset_track
     lap = simulate_lap(load_dataset_track(dataset_dir, 4), range_m=30.0, fp_rate=0.0, seed=0)
     f = lap.frame(142)
+    monkeypatch.setattr(clc.solver, "SKIP_INSERTS", False)
     lane = LaneSolver("clc").solve(f.cones, f.pose)
     assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
     assert set(f.gt_right.tolist()) <= set(lane.right.tolist())
@@ -1322,6 +1326,85 @@ def test_pair_drops_keep_the_start_and_need_a_graph_edge():
     assert not g.has_edge(2, 3)
     got = pair_drops(pts, POSE, PARAMS, g, L, R, 30.0)
     assert [a.tolist() for a, _ in got] == [[0, 1, 14, 3, 4, 5, 6]]
+
+
+def test_skip_inserts_hand_worked():
+    """A straight lane 3.5 m wide, cones 2.5 m apart (x = 0 .. 15); the left boundary skips
+    its cone at x = 7.5 (edge x = 5 -> 10). The lane with it is offered; so it is 0.3 m off the
+    edge, but not 0.5 m (``skipped_cone_m`` 0.4), nor when the right boundary holds it, nor
+    beyond the reach."""
+    xs = np.arange(7) * 2.5
+    pts = np.vstack([np.column_stack([xs, np.full(7, 1.75)]),
+                     np.column_stack([xs, np.full(7, -1.75)])])
+    L, R = np.array([0, 1, 2, 4, 5, 6]), np.arange(7, 14)
+    assert PARAMS.skipped_cone_m == pytest.approx(0.4)
+    g = search_graph(pts, PARAMS)
+    got = skip_inserts(pts, POSE, PARAMS, g, L, R, 25.0)
+    assert [(a.tolist(), b.tolist()) for a, b in got] == [(list(range(7)), R.tolist())]
+    assert lane_is_feasible(pts[got[0][0]], pts[got[0][1]], PARAMS)
+    # The right boundary skipping its own cone: the same, on that side.
+    got = skip_inserts(pts, POSE, PARAMS, g, np.arange(7), L + 7, 25.0)
+    assert [(a.tolist(), b.tolist()) for a, b in got] == [(list(range(7)), R.tolist())]
+    off = pts.copy()
+    off[3, 1] += 0.3
+    assert [a.tolist() for a, _ in skip_inserts(off, POSE, PARAMS, search_graph(off, PARAMS),
+                                                L, R, 25.0)] == [list(range(7))]
+    off[3, 1] += 0.2
+    assert skip_inserts(off, POSE, PARAMS, search_graph(off, PARAMS), L, R, 25.0) == []
+    # The edge 5 -> 10 starts 5 m along the path and ends at 10 m: a reach of 6 m stops there.
+    assert skip_inserts(pts, POSE, PARAMS, g, L, R, 6.0) == []
+    taken = np.array([7, 8, 9, 3, 10, 11, 12, 13])  # cone 3 on the right boundary
+    assert skip_inserts(pts, POSE, PARAMS, g, L, taken, 25.0) == []
+    assert skip_inserts(pts, POSE, dataclasses.replace(PARAMS, skipped_cone_m=0.0), g, L, R,
+                        25.0) == []
+
+
+def test_skip_insert_takes_the_true_cone_track4(dataset_dir, monkeypatch):
+    """Track 4 at R = 30 m, no false positives, pose 94 (every seed): the lane's left boundary
+    skips the true cone 17 m ahead, which lies 0.2 m off the edge that passes it, and diverges
+    before 20 m. The skipped-cone dive does not reach the lane with it (forbidding the edge's
+    far cone, the search takes another option); the lane with it taken in costs 2.7 less in the
+    judge. Offered beside the dives (SKIP_INSERTS) it wins; without them it does not."""
+    import clc.solver
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    f = simulate_lap(load_dataset_track(dataset_dir, 4), range_m=30.0, fp_rate=0.0,
+                     seed=0).frame(94)
+    lane = LaneSolver("clc").solve(f.cones, f.pose)
+    assert lane.stats["skip_inserts"] >= 1
+    assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
+    monkeypatch.setattr(clc.solver, "SKIP_INSERTS", False)
+    off = LaneSolver("clc").solve(f.cones, f.pose)
+    assert off.stats["skip_inserts"] == 0
+    assert score_lane(f, off.left, off.right, off.ok, off.closed).critical_tolerant
+    # The first true cone the lane without inserts misses: 15-20 m ahead, and taken in.
+    skipped = next(int(c) for c in f.gt_left if c not in set(off.left.tolist()))
+    assert 15.0 < np.hypot(*(f.cones[skipped] - f.pose.xy)) < 20.0
+    assert skipped in lane.left.tolist()
+
+
+def test_complete_enumeration_judged_track7(dataset_dir, monkeypatch):
+    """Track 7 at R = 30 m, no false positives, pose 0 (the lap's first map): the enumeration
+    completes, and the ranker's pick skips a true cone on the line 18.7 m ahead, so the lane
+    diverges before 20 m. A complete enumeration runs no dives, but its pick is now judged
+    against its local edits (JUDGE_COMPLETE): the lane with the cone taken in wins, and the
+    status stays OPTIMAL."""
+    import clc.solver
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    f = simulate_lap(load_dataset_track(dataset_dir, 7), range_m=30.0, fp_rate=0.0,
+                     seed=0).frame(0)
+    lane = LaneSolver("clc").solve(f.cones, f.pose)
+    assert lane.stats["complete"] and lane.status is LaneStatus.OPTIMAL
+    assert lane.stats["dives"] == 0 and lane.stats["skip_inserts"] >= 1
+    assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
+    monkeypatch.setattr(clc.solver, "JUDGE_COMPLETE", False)
+    off = LaneSolver("clc").solve(f.cones, f.pose)
+    assert off.stats["skip_inserts"] == 0
+    assert score_lane(f, off.left, off.right, off.ok, off.closed).critical_tolerant
+    assert off.left.size + 1 == lane.left.size
 
 
 def test_pair_drop_takes_the_true_cones_track6(dataset_dir, monkeypatch):
