@@ -362,18 +362,18 @@ class ClcModel:
                                   stopped)
                 n_jogs += len(jogs)
                 dives += jogs
+            # The local edits of an open winner: the pair drops, then the skip inserts.
             drops = (pair_drops(points, pose, p, res.graph, left, right, DIVE_REACH_M,
                                 PAIR_DROP_M)
                      if PAIR_DROPS and not winner[2] else [])
+            inserts = (skip_inserts(points, pose, p, res.graph, left, right, DIVE_REACH_M)
+                       if SKIP_INSERTS and not winner[2] else [])
             n_pairs += len(drops)
-            if SKIP_INSERTS and not winner[2]:
-                inserts = skip_inserts(points, pose, p, res.graph, left, right, DIVE_REACH_M)
-                n_inserts += len(inserts)
-                drops += inserts
+            n_inserts += len(inserts)
             # The lanes the judge weighs against the winner, in order (ties: the earlier lane):
-            # the pair drops, the skip inserts (each scored by the ranker only if it wins),
-            # then each dive's best.
-            contenders: list[tuple] = [(a, b, False, None) for a, b in drops]
+            # the local edits (each scored by the ranker only if it wins), then each dive's
+            # best.
+            contenders: list[tuple] = [(a, b, False, None) for a, b in drops + inserts]
             for dive in dives:
                 n_dives += 1
                 iterations += dive.iterations

@@ -1328,6 +1328,26 @@ def test_pair_drops_keep_the_start_and_need_a_graph_edge():
     assert [a.tolist() for a, _ in got] == [[0, 1, 14, 3, 4, 5, 6]]
 
 
+def _mended_by(dataset_dir, monkeypatch, track, fp_rate, seed, pose, flag, stat):
+    """Solve the frame (R = 30 m) with ``clc.solver.<flag>`` as it is (on) and then off: on,
+    ``lane.stats[stat]`` counts at least one lane and the lane is not critical (tolerant
+    rule); off, it counts none and the lane is critical. Returns the frame and both lanes."""
+    import clc.solver
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    f = simulate_lap(load_dataset_track(dataset_dir, track), range_m=30.0, fp_rate=fp_rate,
+                     seed=seed).frame(pose)
+    lane = LaneSolver("clc").solve(f.cones, f.pose)
+    assert lane.stats[stat] >= 1
+    assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
+    monkeypatch.setattr(clc.solver, flag, False)
+    off = LaneSolver("clc").solve(f.cones, f.pose)
+    assert off.stats[stat] == 0
+    assert score_lane(f, off.left, off.right, off.ok, off.closed).critical_tolerant
+    return f, lane, off
+
+
 def test_skip_inserts_hand_worked():
     """A straight lane 3.5 m wide, cones 2.5 m apart (x = 0 .. 15); the left boundary skips
     its cone at x = 7.5 (edge x = 5 -> 10). The lane with it is offered; so it is 0.3 m off the
@@ -1365,19 +1385,8 @@ def test_skip_insert_takes_the_true_cone_track4(dataset_dir, monkeypatch):
     before 20 m. The skipped-cone dive does not reach the lane with it (forbidding the edge's
     far cone, the search takes another option); the lane with it taken in costs 2.7 less in the
     judge. Offered beside the dives (SKIP_INSERTS) it wins; without them it does not."""
-    import clc.solver
-    from rld.metrics import score_lane
-    from rld.simulation import simulate_lap
-    from rld.tracks import load_dataset_track
-    f = simulate_lap(load_dataset_track(dataset_dir, 4), range_m=30.0, fp_rate=0.0,
-                     seed=0).frame(94)
-    lane = LaneSolver("clc").solve(f.cones, f.pose)
-    assert lane.stats["skip_inserts"] >= 1
-    assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
-    monkeypatch.setattr(clc.solver, "SKIP_INSERTS", False)
-    off = LaneSolver("clc").solve(f.cones, f.pose)
-    assert off.stats["skip_inserts"] == 0
-    assert score_lane(f, off.left, off.right, off.ok, off.closed).critical_tolerant
+    f, lane, off = _mended_by(dataset_dir, monkeypatch, 4, 0.0, 0, 94, "SKIP_INSERTS",
+                              "skip_inserts")
     # The first true cone the lane without inserts misses: 15-20 m ahead, and taken in.
     skipped = next(int(c) for c in f.gt_left if c not in set(off.left.tolist()))
     assert 15.0 < np.hypot(*(f.cones[skipped] - f.pose.xy)) < 20.0
@@ -1390,20 +1399,10 @@ def test_complete_enumeration_judged_track7(dataset_dir, monkeypatch):
     diverges before 20 m. A complete enumeration runs no dives, but its pick is now judged
     against its local edits (JUDGE_COMPLETE): the lane with the cone taken in wins, and the
     status stays OPTIMAL."""
-    import clc.solver
-    from rld.metrics import score_lane
-    from rld.simulation import simulate_lap
-    from rld.tracks import load_dataset_track
-    f = simulate_lap(load_dataset_track(dataset_dir, 7), range_m=30.0, fp_rate=0.0,
-                     seed=0).frame(0)
-    lane = LaneSolver("clc").solve(f.cones, f.pose)
+    _, lane, off = _mended_by(dataset_dir, monkeypatch, 7, 0.0, 0, 0, "JUDGE_COMPLETE",
+                              "skip_inserts")
     assert lane.stats["complete"] and lane.status is LaneStatus.OPTIMAL
-    assert lane.stats["dives"] == 0 and lane.stats["skip_inserts"] >= 1
-    assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
-    monkeypatch.setattr(clc.solver, "JUDGE_COMPLETE", False)
-    off = LaneSolver("clc").solve(f.cones, f.pose)
-    assert off.stats["skip_inserts"] == 0
-    assert score_lane(f, off.left, off.right, off.ok, off.closed).critical_tolerant
+    assert lane.stats["dives"] == 0
     assert off.left.size + 1 == lane.left.size
 
 
@@ -1413,16 +1412,4 @@ def test_pair_drop_takes_the_true_cones_track6(dataset_dir, monkeypatch):
     true cones around them instead costs less, and wins the judge, so the lane diverges before
     20 m. The lane without the false positive costs less still; judged beside the dives
     (PAIR_DROPS) it wins. Without them it does not."""
-    import clc.solver
-    from rld.metrics import score_lane
-    from rld.simulation import simulate_lap
-    from rld.tracks import load_dataset_track
-    f = simulate_lap(load_dataset_track(dataset_dir, 6), range_m=30.0, fp_rate=0.1,
-                     seed=6).frame(28)
-    lane = LaneSolver("clc").solve(f.cones, f.pose)
-    assert lane.stats["pair_drops"] >= 1
-    assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
-    monkeypatch.setattr(clc.solver, "PAIR_DROPS", False)
-    off = LaneSolver("clc").solve(f.cones, f.pose)
-    assert off.stats["pair_drops"] == 0
-    assert score_lane(f, off.left, off.right, off.ok, off.closed).critical_tolerant
+    _mended_by(dataset_dir, monkeypatch, 6, 0.1, 6, 28, "PAIR_DROPS", "pair_drops")
