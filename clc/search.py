@@ -453,9 +453,10 @@ def skip_inserts(points: np.ndarray, pose: Pose, params: LaneParams, graph: Sear
     path[j-1] -> path[j] of a boundary within ``reach_m`` of path ahead of the car that passes
     a cone in neither boundary, a search-graph neighbour of path[j-1] and of path[j] whose
     closest point on the edge is inside it and at most ``params.skipped_cone_m`` away
-    (``search_kernels.skipped_positions``, the skipped-cone trigger of ``contested_dives``),
-    the lane with the nearest such cone between the two. Only lanes that satisfy the shared
-    predicates (``lane_is_feasible``) are returned. Our addition, docs/clc.md.
+    (``search_kernels.skipped_cones``, which also gives the skipped-cone trigger of
+    ``contested_dives``), the lane with the nearest such cone between the two. Only lanes
+    that satisfy the shared predicates (``lane_is_feasible``) are returned. Our addition,
+    docs/clc.md.
 
     A skipped-cone dive forbids path[j] after path[j-1], but the search then takes the
     decider's best option there, which need not be the skipped cone; this offers the judge
@@ -465,26 +466,14 @@ def skip_inserts(points: np.ndarray, pose: Pose, params: LaneParams, graph: Sear
         return []
     paths = [np.ascontiguousarray(left, dtype=np.int64),
              np.ascontiguousarray(right, dtype=np.int64)]
-    used = np.zeros(points.shape[0], dtype=bool)
-    used[paths[0]] = True
-    used[paths[1]] = True
     out = []
     for side, p in enumerate(paths):
         reach = float(reach_m) + _arc_behind(points, p, pose)
-        for j in sk.skipped_positions(points, graph.indptr, graph.indices, p, paths[1 - side],
-                                      float(params.skipped_cone_m), reach):
-            a, b = int(p[j - 1]), int(p[j])
-            nb = graph.neighbours(a)
-            nb = nb[~used[nb]]
-            if nb.size == 0:
+        pos, cones = sk.skipped_cones(points, graph.indptr, graph.indices, p, paths[1 - side],
+                                      float(params.skipped_cone_m), reach)
+        for j, v in zip(pos, cones, strict=True):
+            if v < 0:
                 continue
-            t = geo.segment_parameter(points[nb], points[a], points[b])
-            d = geo.point_segment_distance(points[nb], points[a], points[b])
-            ok = (t > 0.0) & (t < 1.0) & (d <= params.skipped_cone_m)
-            ok &= np.array([graph.has_edge(int(v), b) for v in nb])
-            if not ok.any():
-                continue
-            v = int(nb[ok][np.argmin(d[ok])])
             trial = list(paths)
             trial[side] = np.insert(p, j, v)
             if lane_is_feasible(points[trial[0]], points[trial[1]], params):

@@ -292,7 +292,16 @@ def skipped_positions(pts, adj_ptr, adj_idx, path, other, tol, reach):
     ``reach`` metres of path length from its start where the edge path[j-1] -> path[j] passes
     a skipped cone: a search-graph neighbour of path[j-1], in neither boundary, whose closest
     point on that edge is inside it (not an end) and at most ``tol`` metres away. Returns the
-    positions in order."""
+    positions in order (``skipped_cones`` also gives the cone to take in at each)."""
+    return skipped_cones(pts, adj_ptr, adj_idx, path, other, tol, reach)[0]
+
+
+@njit(cache=True)
+def skipped_cones(pts, adj_ptr, adj_idx, path, other, tol, reach):
+    """``skipped_positions`` and, at each position j, the skipped cone nearest the edge
+    path[j-1] -> path[j] that is also a search-graph neighbour of path[j] (so a boundary can
+    take it in between the two; ``clc.search.skip_inserts``), or -1 when none is. Returns the
+    two arrays, positions and cones."""
     N = pts.shape[0]
     used = np.zeros(N, dtype=np.bool_)
     for v in path:
@@ -300,6 +309,7 @@ def skipped_positions(pts, adj_ptr, adj_idx, path, other, tol, reach):
     for v in other:
         used[v] = True
     out = np.empty(path.shape[0], dtype=np.int64)
+    cones = np.empty(path.shape[0], dtype=np.int64)
     m = 0
     arc = 0.0
     for j in range(1, path.shape[0]):
@@ -308,17 +318,27 @@ def skipped_positions(pts, adj_ptr, adj_idx, path, other, tol, reach):
         arc += math.hypot(pts[b, 0] - pts[a, 0], pts[b, 1] - pts[a, 1])
         if arc > reach:
             break
+        found = False
+        best, best_d = -1, np.inf
         for s in range(adj_ptr[a], adj_ptr[a + 1]):
             v = adj_idx[s]
             if used[v]:
                 continue
             d, t = point_segment_param(pts[v, 0], pts[v, 1], pts[a, 0], pts[a, 1],
                                        pts[b, 0], pts[b, 1])
-            if 0.0 < t < 1.0 and d <= tol:
-                out[m] = j
-                m += 1
-                break
-    return out[:m]
+            if not (0.0 < t < 1.0 and d <= tol):
+                continue
+            found = True
+            if d < best_d:
+                lo, hi = adj_ptr[v], adj_ptr[v + 1]  # v's neighbours, sorted: is b one?
+                k = lo + np.searchsorted(adj_idx[lo:hi], b)
+                if k < hi and adj_idx[k] == b:
+                    best, best_d = v, d
+        if found:
+            out[m] = j
+            cones[m] = best
+            m += 1
+    return out[:m], cones[:m]
 
 
 @njit(cache=True)
