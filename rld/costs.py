@@ -13,7 +13,7 @@ import numpy as np
 
 from rld import costs_kernels as ck
 from rld import geometry as geo
-from rld.constraints import lane_widths, near_car_mask
+from rld.constraints import lane_widths
 from rld.types import LaneParams, Pose
 
 __all__ = [
@@ -49,17 +49,24 @@ FEATURE_NAMES = (
 
 
 def spacing_cost(lengths_m: np.ndarray, expected_m: float, tolerance_m: float) -> np.ndarray:
-    """RLD eq. 18: s_ij = ((D_ij - d_e) / d_t)^4, dimensionless."""
-    return ((np.asarray(lengths_m, dtype=np.float64) - expected_m) / tolerance_m) ** 4
+    """RLD eq. 18: s_ij = ((D_ij - d_e) / d_t)^4, dimensionless (``costs_kernels.spacing_term``).
+    """
+    d = np.asarray(lengths_m, dtype=np.float64)
+    out = np.empty(d.size)
+    ck.spacing_costs(np.ascontiguousarray(d.ravel()), float(expected_m), float(tolerance_m), out)
+    return out.reshape(d.shape)
 
 
 def angle_cost(turns_rad: np.ndarray, tolerance_rad: float) -> np.ndarray:
     """RLD eq. 20: t_ijk = ((angle(a_ij, a_jk) - theta_e) / theta_t)^4 with theta_e = pi.
 
     ``angle`` is the angle at the shared cone between the two edges, pi for a straight line, so
-    ``angle - pi = -|turn|`` and the cost is (|turn| / theta_t)^4.
+    ``angle - pi = -|turn|`` and the cost is (|turn| / theta_t)^4 (``costs_kernels.angle_term``).
     """
-    return (np.abs(np.asarray(turns_rad, dtype=np.float64)) / tolerance_rad) ** 4
+    t = np.asarray(turns_rad, dtype=np.float64)
+    out = np.empty(t.size)
+    ck.angle_costs(np.ascontiguousarray(t.ravel()), float(tolerance_rad), out)
+    return out.reshape(t.shape)
 
 
 def regularity_cost(len_a: np.ndarray, len_b: np.ndarray, tolerance: float) -> np.ndarray:
@@ -70,9 +77,13 @@ def regularity_cost(len_a: np.ndarray, len_b: np.ndarray, tolerance: float) -> n
     edge beside whole ones; the paper's spacing cost (eq. 18) scores each edge alone. RLD pays
     it on the angle variables f_ijk (eq. 29 gets ``w_regularity`` times it beside w_t t_ijk).
     The square, not the fourth power of eqs 18 and 20: measured better in the paper's
-    experiment (docs/benchmarks.md)."""
-    r = np.log(np.asarray(len_a, dtype=np.float64) / np.asarray(len_b, dtype=np.float64))
-    return (r / math.log(tolerance)) ** 2
+    experiment (docs/benchmarks.md). ``costs_kernels.regularity_term``."""
+    a, b = np.broadcast_arrays(np.asarray(len_a, dtype=np.float64),
+                               np.asarray(len_b, dtype=np.float64))
+    out = np.empty(a.size)
+    ck.regularity_costs(np.ascontiguousarray(a.ravel()), np.ascontiguousarray(b.ravel()),
+                        math.log(tolerance), out)
+    return out.reshape(a.shape)
 
 
 def width_roughness(left_xy: np.ndarray, right_xy: np.ndarray) -> float:
@@ -90,8 +101,9 @@ def width_roughness(left_xy: np.ndarray, right_xy: np.ndarray) -> float:
     CLC's dive judge (``clc.solver.dive_cost``) adds ``LaneParams.w_width_roughness`` times it
     to RLD's objective: a false positive 0.6-1.5 m beside a true cone makes a line as smooth
     as the true one, but jogs the width."""
-    return float(sum((width_second_differences(Q, T) ** 2).sum()
-                     for Q, T in ((left_xy, right_xy), (right_xy, left_xy))))
+    return float(ck.width_roughness(
+        np.ascontiguousarray(left_xy, dtype=np.float64).reshape(-1, 2),
+        np.ascontiguousarray(right_xy, dtype=np.float64).reshape(-1, 2)))
 
 
 def turn_roughness(xy: np.ndarray) -> float:
@@ -120,8 +132,9 @@ def width_second_differences(query_xy: np.ndarray, target_xy: np.ndarray) -> np.
     T = np.asarray(target_xy, dtype=np.float64).reshape(-1, 2)
     if Q.shape[0] < 3 or T.shape[0] < 2:
         return np.zeros(0)
-    w = geo.point_polyline_distance(Q, T)
-    return w[:-2] - 2.0 * w[1:-1] + w[2:]
+    out = np.empty(Q.shape[0] - 2)
+    ck.width_second_differences(np.ascontiguousarray(Q), np.ascontiguousarray(T), out)
+    return out
 
 
 def heading_cost(
@@ -132,14 +145,16 @@ def heading_cost(
     ``v_ij`` is the edge vector (metres, not normalised, as printed), ``h_c`` the unit heading,
     ``d_car`` the distance from the car to the edge's midpoint, floored at ``min_distance_m``
     (our addition: the paper divides by zero for an edge whose midpoint is under the car).
+    ``costs_kernels.heading_term``.
     """
-    a, b = points[edges[:, 0]], points[edges[:, 1]]
-    v = b - a
+    points = np.asarray(points, dtype=np.float64)
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    out = np.empty(edges.shape[0])
     h = pose.heading
-    cross = np.abs(v[:, 0] * h[1] - v[:, 1] * h[0])
-    mid = (a + b) / 2 - pose.xy
-    d_car = np.maximum(np.hypot(mid[:, 0], mid[:, 1]), min_distance_m)
-    return (cross / d_car) ** 4
+    ck.heading_costs(np.ascontiguousarray(points[edges[:, 0]]),
+                     np.ascontiguousarray(points[edges[:, 1]]), float(pose.xy[0]),
+                     float(pose.xy[1]), float(h[0]), float(h[1]), float(min_distance_m), out)
+    return out
 
 
 def high_cost_mask(costs: np.ndarray, critical: float) -> np.ndarray:
@@ -246,14 +261,12 @@ def within_radius(points: np.ndarray, idx: np.ndarray, pose: Pose,
     boundary that ends just outside it is not cut short of the edge that reaches it."""
     if not (isinstance(radius_m, int | float) and math.isfinite(radius_m) and radius_m > 0):
         raise ValueError(f"radius_m must be a positive number of metres, got {radius_m!r}")
-    idx = np.asarray(idx, dtype=np.int64)
+    idx = np.ascontiguousarray(idx, dtype=np.int64)
     if idx.size <= 2:
         return idx
-    far = np.flatnonzero(~near_car_mask(np.asarray(points, dtype=np.float64)[idx], pose,
-                                        radius_m))
-    if far.size == 0:
-        return idx
-    return idx[:max(int(far[0]) + 1, 2)]
+    # near_car_mask's test (distance <= radius_m is near), in one compiled loop.
+    return idx[:ck.radius_cut(np.ascontiguousarray(points, dtype=np.float64), idx,
+                              float(pose.xy[0]), float(pose.xy[1]), float(radius_m))]
 
 
 def open_path_costs(points: np.ndarray, flat: np.ndarray, ptr: np.ndarray, pose: Pose,
@@ -264,27 +277,29 @@ def open_path_costs(points: np.ndarray, flat: np.ndarray, ptr: np.ndarray, pose:
     coefficients (eq. 29, ``edge_objective`` with ``colors`` and ``heading``) plus ``w_t``
     times the angle cost (eq. 20) at its interior cones, 0 for a path of fewer than two cones.
     ``lane_cost`` sums it over the sides of an open lane; CLC's ``rld_cost`` ranker scores a
-    whole candidate list with it."""
-    flat = np.asarray(flat, dtype=np.int64)
-    ptr = np.asarray(ptr, dtype=np.int64)
+    whole candidate list with it. One compiled loop (``costs_kernels.open_path_costs``) over
+    the same terms as ``edge_objective`` and ``angle_cost``; the colour cost, when given, is
+    added in numpy."""
+    flat = np.ascontiguousarray(flat, dtype=np.int64)
+    ptr = np.ascontiguousarray(ptr, dtype=np.int64)
     out = np.zeros(ptr.size - 1)
     if flat.size < 2:
         return out
-    owner = np.repeat(np.arange(ptr.size - 1), np.diff(ptr))
-    same = owner[:-1] == owner[1:]
-    edges = np.column_stack([flat[:-1][same], flat[1:][same]])
-    np.add.at(out, owner[:-1][same], edge_objective(points, edges, pose, params, colors, heading))
-    same3 = owner[:-2] == owner[2:]
-    if same3.any():
-        turns = geo.turn_angles(points[flat[:-2][same3]], points[flat[1:-1][same3]],
-                                points[flat[2:][same3]])
-        np.add.at(out, owner[:-2][same3],
-                  params.w_angle * angle_cost(turns, params.angle_tolerance_rad))
-        if params.w_regularity:
-            a, b, c = (points[flat[:-2][same3]], points[flat[1:-1][same3]],
-                       points[flat[2:][same3]])
-            np.add.at(out, owner[:-2][same3], params.w_regularity * regularity_cost(
-                np.hypot(*(b - a).T), np.hypot(*(c - b).T), params.regularity_tolerance))
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    h = pose.heading
+    ck.open_path_costs(pts, flat, ptr, float(pose.xy[0]), float(pose.xy[1]), float(h[0]),
+                       float(h[1]), float(params.expected_spacing_m),
+                       float(params.spacing_tolerance_m), float(params.w_spacing),
+                       float(params.w_benefit), float(params.w_heading) if heading else 0.0,
+                       float(params.heading_min_distance_m), float(params.w_angle),
+                       float(params.angle_tolerance_rad), float(params.w_regularity),
+                       math.log(params.regularity_tolerance) if params.w_regularity else 1.0,
+                       out)
+    if colors is not None:
+        owner = np.repeat(np.arange(ptr.size - 1), np.diff(ptr))
+        same = owner[:-1] == owner[1:]
+        edges = np.column_stack([flat[:-1][same], flat[1:][same]])
+        np.add.at(out, owner[:-1][same], params.w_color * color_cost(colors, edges))
     return out
 
 

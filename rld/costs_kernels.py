@@ -1,9 +1,9 @@
-"""numba kernels of the CLC ranking features (Ivanov & Markgraf 2024, section VII) and of the
-turn roughness of CLC's dive judge (ours).
+"""numba kernels of the CLC ranking features (Ivanov & Markgraf 2024, section VII), of the
+turn roughness of CLC's dive judge (ours), and of RLD's objective terms (Brandes et al. 2020,
+eqs 18, 20, 25, 29; the formulas live here once, ``rld.costs`` wraps them).
 
-Called only through ``rld.costs.ranking_features`` and ``rld.costs.turn_roughness``; plain
-float64 arrays in, the (8,) feature vector filled in place (a float out for the roughness),
-nothing of numba leaks out. Turn angles come from the shared kernel
+Called only through ``rld.costs``; plain float64 and int64 arrays in, outputs filled in place
+(a float out for the roughness), nothing of numba leaks out. Turn angles come from the shared kernel
 ``rld.geometry_kernels.turn_angle``, so a turn means the same here as in C_seg (CLC eq. 15) and
 in RLD's angle cost (eq. 20). Variances are population variances computed in two passes (mean
 first, then the mean squared deviation, as ``numpy.var``), 0 for fewer than two values.
@@ -13,9 +13,10 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
-from rld.geometry_kernels import turn_angle
+from rld.geometry_kernels import point_polyline_distance_many, turn_angle
 
 #: Length of the feature vector (``rld.costs.FEATURE_NAMES``).
 N_FEATURES = 8
@@ -150,3 +151,149 @@ def closed_lane_features(L, R, widths, out):
     and C_seg (CLC eq. 15) count them. ``widths`` are those of the closed lane
     (``rld.constraints.lane_widths(L, R, closed=True)``)."""
     _fill(L, R, widths, out, True)
+
+
+# ----------------------------------------------------------------------------------------------
+# RLD's objective terms (Brandes et al. 2020, eqs 18, 20, 25, 29) and the spacing regularity
+# (ours): the one home of each formula. ``rld.costs`` wraps the array forms for numpy callers;
+# ``open_path_costs`` sums them over many open paths at once (CLC's dive judge and ``rld_cost``
+# ranker, where numpy's per-call overhead dominated: 146 us for one lane within the dive reach).
+
+
+@njit(cache=True)
+def spacing_term(length, expected, tolerance):
+    """RLD eq. 18: ((D - d_e) / d_t)^4 for one edge of length D (metres)."""
+    r = (length - expected) / tolerance
+    r2 = r * r
+    return r2 * r2
+
+
+@njit(cache=True)
+def angle_term(turn, tolerance):
+    """RLD eq. 20 with theta_e = pi: (|turn| / theta_t)^4 for one signed turn (rad)."""
+    r = abs(turn) / tolerance
+    r2 = r * r
+    return r2 * r2
+
+
+@njit(cache=True)
+def heading_term(ax, ay, bx, by, px, py, hx, hy, min_distance):
+    """RLD eq. 25 for the edge a -> b: (|v x h| / d_car)^4, v = b - a (metres, not normalised),
+    h the unit heading, d_car the distance from the car (px, py) to the edge's midpoint,
+    floored at ``min_distance`` (ours: the paper divides by zero under the car)."""
+    vx = bx - ax
+    vy = by - ay
+    cross = abs(vx * hy - vy * hx)
+    d = max(math.hypot(0.5 * (ax + bx) - px, 0.5 * (ay + by) - py), min_distance)
+    r = cross / d
+    r2 = r * r
+    return r2 * r2
+
+
+@njit(cache=True)
+def regularity_term(len_a, len_b, log_tolerance):
+    """Spacing regularity (ours): (ln(D_a / D_b) / ln(rho_t))^2 for two consecutive edges."""
+    r = math.log(len_a / len_b) / log_tolerance
+    return r * r
+
+
+@njit(cache=True)
+def spacing_costs(lengths, expected, tolerance, out):
+    for i in range(lengths.shape[0]):
+        out[i] = spacing_term(lengths[i], expected, tolerance)
+
+
+@njit(cache=True)
+def angle_costs(turns, tolerance, out):
+    for i in range(turns.shape[0]):
+        out[i] = angle_term(turns[i], tolerance)
+
+
+@njit(cache=True)
+def heading_costs(a, b, px, py, hx, hy, min_distance, out):
+    for i in range(a.shape[0]):
+        out[i] = heading_term(a[i, 0], a[i, 1], b[i, 0], b[i, 1], px, py, hx, hy, min_distance)
+
+
+@njit(cache=True)
+def regularity_costs(len_a, len_b, log_tolerance, out):
+    for i in range(len_a.shape[0]):
+        out[i] = regularity_term(len_a[i], len_b[i], log_tolerance)
+
+
+@njit(cache=True)
+def open_path_costs(points, flat, ptr, px, py, hx, hy, expected, tolerance, w_spacing,
+                    w_benefit, w_heading, min_distance, w_angle, angle_tolerance,
+                    w_regularity, log_regularity, out):
+    """RLD's objective (eq. 29, no colour) of each open path ``flat[ptr[k]:ptr[k + 1]]``
+    (indices into ``points`` (N, 2), metres) into ``out[k]``: every edge's w_s s_ij + w_p p_ij
+    - w_b (eqs 18, 25; ``w_heading`` 0 leaves the heading out), every interior cone's w_t
+    t_ijk (eq. 20, the turn of ``geometry_kernels.turn_angle``) and, when ``w_regularity`` is
+    not 0, its spacing regularity. A path of fewer than two cones costs 0."""
+    for k in range(ptr.shape[0] - 1):
+        lo = ptr[k]
+        hi = ptr[k + 1]
+        total = 0.0
+        for i in range(lo, hi - 1):
+            a = flat[i]
+            b = flat[i + 1]
+            ax, ay, bx, by = points[a, 0], points[a, 1], points[b, 0], points[b, 1]
+            total += w_spacing * spacing_term(math.hypot(bx - ax, by - ay), expected,
+                                              tolerance) - w_benefit
+            if w_heading != 0.0:
+                total += w_heading * heading_term(ax, ay, bx, by, px, py, hx, hy,
+                                                  min_distance)
+        for i in range(lo, hi - 2):
+            a = flat[i]
+            b = flat[i + 1]
+            c = flat[i + 2]
+            t = turn_angle(points[a, 0], points[a, 1], points[b, 0], points[b, 1],
+                           points[c, 0], points[c, 1])
+            total += w_angle * angle_term(t, angle_tolerance)
+            if w_regularity != 0.0:
+                total += w_regularity * regularity_term(
+                    math.hypot(points[b, 0] - points[a, 0], points[b, 1] - points[a, 1]),
+                    math.hypot(points[c, 0] - points[b, 0], points[c, 1] - points[b, 1]),
+                    log_regularity)
+        out[k] = total
+
+
+@njit(cache=True)
+def radius_cut(points, idx, px, py, radius):
+    """How many cones ``rld.costs.within_radius`` keeps of the path ``idx`` (indices into
+    ``points``): up to and with the first cone farther than ``radius`` (metres) from the car
+    (px, py), at least two; all of them when none is that far."""
+    n = idx.shape[0]
+    for i in range(n):
+        if math.hypot(points[idx[i], 0] - px, points[idx[i], 1] - py) > radius:
+            return max(i + 1, 2) if n >= 2 else n
+    return n
+
+
+@njit(cache=True)
+def width_second_differences(query, target, out):
+    """out[k] (k < n - 2) = the second difference at query cone k + 1 of the matching-line
+    lengths of ``query`` (n >= 3, 2) to the polyline ``target`` (m >= 2, 2), metres
+    (``rld.costs.width_second_differences``)."""
+    w = np.empty(query.shape[0])
+    point_polyline_distance_many(query, target, w)
+    for k in range(query.shape[0] - 2):
+        out[k] = w[k] - 2.0 * w[k + 1] + w[k + 2]
+
+
+@njit(cache=True)
+def width_roughness(left, right):
+    """Sum of the squared second differences of both boundaries' matching-line lengths, m^2
+    (``rld.costs.width_roughness``); a side of fewer than 3 cones, or facing fewer than 2,
+    adds 0."""
+    total = 0.0
+    for side in range(2):
+        q = left if side == 0 else right
+        t = right if side == 0 else left
+        if q.shape[0] < 3 or t.shape[0] < 2:
+            continue
+        d2 = np.empty(q.shape[0] - 2)
+        width_second_differences(q, t, d2)
+        for k in range(d2.shape[0]):
+            total += d2[k] * d2[k]
+    return total

@@ -128,12 +128,12 @@ def turn_angles(p0, p1, p2) -> np.ndarray:
 def polyline_turn_angles(xy: np.ndarray, closed: bool = False) -> np.ndarray:
     """Signed turn at every interior vertex of the polyline ``xy`` (k, 2): k - 2 values, or k
     values for a closed ring (the turn at vertex i, from segment i-1,i to i,i+1)."""
-    xy = np.asarray(xy, dtype=np.float64)
-    if closed:
-        return turn_angles(np.roll(xy, 1, axis=0), xy, np.roll(xy, -1, axis=0))
-    if xy.shape[0] < 3:
+    xy = np.ascontiguousarray(xy, dtype=np.float64).reshape(-1, 2)
+    if not closed and xy.shape[0] < 3:
         return np.zeros(0)
-    return turn_angles(xy[:-2], xy[1:-1], xy[2:])
+    out = np.empty(xy.shape[0] if closed else xy.shape[0] - 2)
+    gk.polyline_turns(xy, bool(closed), out)
+    return out
 
 
 def cumulative_length(xy: np.ndarray, closed: bool = False) -> np.ndarray:

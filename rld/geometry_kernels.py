@@ -250,6 +250,23 @@ def turn_angle_many(a, b, c, out):
 
 
 @njit(cache=True)
+def polyline_turns(xy, closed, out):
+    """out = the signed turn (``turn_angle``) at every interior vertex of the polyline ``xy``
+    (k, 2): vertices 1..k-2 in order (k - 2 values) or, ``closed``, every vertex i from
+    segment i-1,i to i,i+1 with wrap-around (k values)."""
+    k = xy.shape[0]
+    if closed:
+        for i in range(k):
+            a = (i - 1) % k
+            c = (i + 1) % k
+            out[i] = turn_angle(xy[a, 0], xy[a, 1], xy[i, 0], xy[i, 1], xy[c, 0], xy[c, 1])
+        return
+    for i in range(1, k - 1):
+        out[i - 1] = turn_angle(xy[i - 1, 0], xy[i - 1, 1], xy[i, 0], xy[i, 1],
+                                xy[i + 1, 0], xy[i + 1, 1])
+
+
+@njit(cache=True)
 def point_polyline_nearest(px, py, poly, seed):
     """Distance from point p to the polyline ``poly`` (k >= 2, 2) and the index of a nearest
     segment; segment ``seed`` is tried first (a good guess prunes the rest)."""

@@ -6,6 +6,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from rld import costs
+from rld import geometry as geo
 from rld.types import LaneParams, Pose
 
 CAR = Pose(0.0, 0.0, 0.0)
@@ -261,3 +262,83 @@ def test_turn_roughness_against_a_loop(raw, angle, dx, dy):
     moved = xy @ np.array([[c, -s], [s, c]]).T + [dx, dy]
     assert costs.turn_roughness(moved) == pytest.approx(want, abs=1e-6)
     assert costs.turn_roughness(xy[::-1]) == pytest.approx(want, abs=1e-9)
+
+
+def _reference_path_cost(pts, path, pose, p, heading=True):
+    """RLD eq. 29 for one open path, term by term in plain Python (eqs 18, 20, 25 as printed,
+    with the regularity term), the brute-force answer for ``open_path_costs``."""
+    total = 0.0
+    h = (math.cos(pose.yaw), math.sin(pose.yaw))
+    for a, b in zip(path[:-1], path[1:], strict=True):
+        v = pts[b] - pts[a]
+        total += p.w_spacing * ((math.hypot(*v) - p.expected_spacing_m)
+                                / p.spacing_tolerance_m) ** 4 - p.w_benefit
+        if heading:
+            mid = (pts[a] + pts[b]) / 2 - pose.xy
+            d = max(math.hypot(*mid), p.heading_min_distance_m)
+            total += p.w_heading * (abs(v[0] * h[1] - v[1] * h[0]) / d) ** 4
+    for a, b, c in zip(path[:-2], path[1:-1], path[2:], strict=True):
+        u, w = pts[b] - pts[a], pts[c] - pts[b]
+        turn = math.atan2(u[0] * w[1] - u[1] * w[0], u[0] * w[0] + u[1] * w[1])
+        total += p.w_angle * (abs(turn) / p.angle_tolerance_rad) ** 4
+        if p.w_regularity:
+            total += p.w_regularity * (math.log(math.hypot(*u) / math.hypot(*w))
+                                       / math.log(p.regularity_tolerance)) ** 2
+    return total
+
+
+@given(seed=st.integers(0, 10_000), sizes=st.lists(st.integers(0, 7), min_size=1, max_size=5),
+       regularity=st.sampled_from([0.0, 1.0]), heading=st.booleans(),
+       yaw=st.floats(-math.pi, math.pi))
+def test_open_path_costs_against_a_loop(seed, sizes, regularity, heading, yaw):
+    """The compiled batch (``costs_kernels.open_path_costs``) equals the plain loop for every
+    path of a random batch, paths of 0 and 1 cone costing 0; colours add w_color per edge
+    joining a left-labelled to a right-labelled cone."""
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(-20, 20, size=(30, 2))
+    pose = Pose(float(rng.uniform(-5, 5)), float(rng.uniform(-5, 5)), yaw)
+    p = LaneParams(w_regularity=regularity)
+    paths = [rng.choice(30, size=n, replace=False) for n in sizes]
+    ptr = np.r_[0, np.cumsum(sizes)]
+    flat = np.concatenate(paths).astype(np.int64)
+    got = costs.open_path_costs(pts, flat, ptr, pose, p, heading=heading)
+    want = [_reference_path_cost(pts, q, pose, p, heading) for q in paths]
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
+    colors = rng.integers(0, 3, size=30)
+    mixed = [sum(int(colors[a] > 0 and colors[b] > 0 and colors[a] != colors[b])
+                 for a, b in zip(q[:-1], q[1:], strict=True)) for q in paths]
+    np.testing.assert_allclose(
+        costs.open_path_costs(pts, flat, ptr, pose, p, colors=colors, heading=heading),
+        np.array(want) + p.w_color * np.array(mixed), rtol=1e-9, atol=1e-9)
+
+
+@given(seed=st.integers(0, 10_000), n=st.integers(0, 9), radius=st.floats(0.5, 30.0))
+def test_within_radius_against_the_mask(seed, n, radius):
+    """Up to and with the first cone farther than the radius (``near_car_mask``'s test), at
+    least two, all when none is that far."""
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(-25, 25, size=(12, 2))
+    pose = Pose(float(rng.uniform(-3, 3)), float(rng.uniform(-3, 3)), 0.3)
+    idx = rng.choice(12, size=n, replace=False)
+    got = costs.within_radius(pts, idx, pose, radius)
+    far = [k for k, i in enumerate(idx) if math.hypot(*(pts[i] - pose.xy)) > radius]
+    want = idx if n <= 2 or not far else idx[:max(far[0] + 1, 2)]
+    np.testing.assert_array_equal(got, want)
+
+
+@given(seed=st.integers(0, 10_000), n=st.integers(0, 8), m=st.integers(0, 8))
+def test_width_roughness_against_numpy(seed, n, m):
+    """The compiled sum equals the squared second differences of the matching-line lengths
+    (``geometry.point_polyline_distance``) summed over both sides in numpy; a side of fewer
+    than 3 cones, or facing fewer than 2, adds 0."""
+    rng = np.random.default_rng(seed)
+    left = np.cumsum(rng.uniform(1, 4, size=(n, 2)), axis=0) + [0.0, 2.0]
+    right = np.cumsum(rng.uniform(1, 4, size=(m, 2)), axis=0) - [0.0, 2.0]
+    want = 0.0
+    for q, t in ((left, right), (right, left)):
+        if len(q) >= 3 and len(t) >= 2:
+            w = geo.point_polyline_distance(q, t)
+            want += float(((w[:-2] - 2 * w[1:-1] + w[2:]) ** 2).sum())
+            np.testing.assert_allclose(costs.width_second_differences(q, t),
+                                       w[:-2] - 2 * w[1:-1] + w[2:], atol=1e-12)
+    assert costs.width_roughness(left, right) == pytest.approx(want, abs=1e-9)
