@@ -116,6 +116,9 @@ SKIP_INSERTS = True
 #: and the skipped cones taken in): a dive could only find a lane the ranker has already seen
 #: (docs/clc.md, "Skipped cones taken in").
 JUDGE_COMPLETE = True
+#: What ``ClcModel._dive_rounds`` counts, as ``lane.stats`` keys.
+ROUND_COUNTS = ("dives", "dive_rounds", "short_lane_rounds", "jog_dives", "pair_drops",
+                "skip_inserts")
 #: Drop a closed lane's join cone when the ring is cheaper without it (``drop_ring_join``).
 RING_JOIN = True
 
@@ -324,13 +327,15 @@ class ClcModel:
         elsewhere; and the winner with each skipped cone taken in (``clc.search.skip_inserts``,
         SKIP_INSERTS; open winners only). ``search=False`` (a complete enumeration,
         JUDGE_COMPLETE) runs no dive: only these local edits are judged.
-        Returns the final (left, right, closed, score), the dives run, their iterations, the
-        rounds run (a round that changes nothing ends them), the rounds whose winner was
-        short, the jog dives among the dives, the pair-drop lanes judged, the skip-insert
-        lanes judged, and whether the deadline stopped them."""
+        Returns the final (left, right, closed, score), the counts (a dict keyed by
+        ROUND_COUNTS, for ``lane.stats``: the dives run, the rounds run (a round that changes
+        nothing ends them), the rounds whose winner was short, the jog dives among the dives,
+        the pair-drop and the skip-insert lanes judged), the dives' iterations, and whether
+        the deadline stopped them."""
         p = self.params
         done: set[tuple] = set()
-        n_dives = iterations = rounds = short_rounds = n_jogs = n_pairs = n_inserts = 0
+        counts = dict.fromkeys(ROUND_COUNTS, 0)
+        iterations = rounds = 0
         cost = None  # the winner's, computed once a dive has a lane to compare
         # Whether the map reaches beyond SHORT_LANE_M (_short): found at most once per call,
         # when a winner is short (it does not depend on the winner; 9 us on a 409-cone map).
@@ -352,7 +357,7 @@ class ClcModel:
             if search and SHORT_LANE_M > 0 and _short(points, pose, left, right, SHORT_LANE_M,
                                                       beyond):
                 # A short winner: also every choice within the reach, both boundaries rebuilt.
-                short_rounds += 1
+                counts["short_lane_rounds"] += 1
                 dives += contested_dives(points, pose, p, res.graph, res.start, left, right,
                                          np.inf, DIVE_REACH_M, budget, skip=done,
                                          cut_other=True, deadline=deadline,
@@ -360,7 +365,7 @@ class ClcModel:
             if search and JOG_DIVES > 0:
                 jogs = _jog_dives(points, pose, p, res, left, right, budget, done, deadline,
                                   stopped)
-                n_jogs += len(jogs)
+                counts["jog_dives"] += len(jogs)
                 dives += jogs
             # The local edits of an open winner: the pair drops, then the skip inserts.
             drops = (pair_drops(points, pose, p, res.graph, left, right, DIVE_REACH_M,
@@ -368,14 +373,14 @@ class ClcModel:
                      if PAIR_DROPS and not winner[2] else [])
             inserts = (skip_inserts(points, pose, p, res.graph, left, right, DIVE_REACH_M)
                        if SKIP_INSERTS and not winner[2] else [])
-            n_pairs += len(drops)
-            n_inserts += len(inserts)
+            counts["pair_drops"] += len(drops)
+            counts["skip_inserts"] += len(inserts)
             # The lanes the judge weighs against the winner, in order (ties: the earlier lane):
             # the local edits (each scored by the ranker only if it wins), then each dive's
             # best.
             contenders: list[tuple] = [(a, b, False, None) for a, b in drops + inserts]
             for dive in dives:
-                n_dives += 1
+                counts["dives"] += 1
                 iterations += dive.iterations
                 if not dive.candidates:
                     continue
@@ -396,8 +401,8 @@ class ClcModel:
             if best is None:
                 break
             winner, cost = best, best_cost
-        return (*winner, n_dives, iterations, rounds, short_rounds, n_jogs, n_pairs, n_inserts,
-                cut or bool(stopped))
+        counts["dive_rounds"] = rounds
+        return (*winner, counts, iterations, cut or bool(stopped))
 
     def solve(self, points: np.ndarray, pose: Pose, colors=None, time_limit_s=None,
               confidence=None) -> Lane:
@@ -468,17 +473,14 @@ class ClcModel:
         left, right, closed = res.candidates[best]
         left, right = left.copy(), right.copy()
         score = float(scores[best])
-        n_dives = rounds = short_rounds = n_jogs = n_pairs = n_inserts = 0
+        counts = dict.fromkeys(ROUND_COUNTS, 0)
         if (not res.complete or JUDGE_COMPLETE) and self.params.contested_margin > 0:
-            (left, right, closed, score, n_dives, it, rounds, short_rounds, n_jogs, n_pairs,
-             n_inserts, cut) = self._dive_rounds(points, pose, res,
-                                                 (left, right, closed, score), deadline,
-                                                 search=not res.complete)
+            left, right, closed, score, counts, it, cut = self._dive_rounds(
+                points, pose, res, (left, right, closed, score), deadline,
+                search=not res.complete)
             stats["cut_short"] |= cut
             iterations += it
-        stats.update(dives=n_dives, dive_rounds=rounds, short_lane_rounds=short_rounds,
-                     jog_dives=n_jogs, pair_drops=n_pairs, skip_inserts=n_inserts,
-                     iterations=iterations)
+        stats.update(counts, iterations=iterations)
         stats["dropped"] = 0
         if not res.complete and not closed and DROP_DETOURS:
             left, right, stats["dropped"] = drop_detours(points, pose, self.params, res.graph,
