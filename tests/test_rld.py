@@ -473,3 +473,50 @@ def test_program_edge_ids_hand_worked():
     assert program.edge_ids([], []).shape == (0,)
     all_ids = program.edge_ids(program.edges[:, 1], program.edges[:, 0])
     assert all_ids.tolist() == list(range(program.n_edges))
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_cpsat_text_model_against_brute_force(seed):
+    # CP-SAT's model is written as protobuf text (rld.backends.cpsat.model_text): random small
+    # 0/1 programs with every row kind it writes (pairs as at-most-one, general rows with
+    # integer coefficients and fractional or infinite bounds, fixed columns) against
+    # enumerating every 0/1 vector.
+    import scipy.sparse as sp
+
+    rng = np.random.default_rng(seed)
+    k = 6
+    rows, lo, hi = [], [], []
+    for _ in range(rng.integers(1, 6)):
+        if rng.random() < 0.4:
+            a, b = rng.choice(k, 2, replace=False)
+            row = np.zeros(k)
+            row[[a, b]] = 1
+            rows.append(row)
+            lo.append(-np.inf)
+            hi.append(1.0)
+        else:
+            row = rng.integers(-2, 3, size=k).astype(float)
+            rows.append(row)
+            lo.append(rng.choice([-np.inf, rng.uniform(-2, 1)]))
+            hi.append(rng.choice([np.inf, rng.uniform(0, 3)]))
+    col_lo, col_hi = np.zeros(k), np.ones(k)
+    col_lo[rng.random(k) < 0.15] = 1
+    col_hi[(rng.random(k) < 0.15) & (col_lo == 0)] = 0
+    base = build_program(np.array([[2.0, 2], [4, 2], [2, -2], [4, -2]]), Pose(0, 0, 0), PARAMS)
+    prog = dataclasses.replace(base, c=rng.normal(size=k), A=sp.csr_matrix(np.array(rows)),
+                               row_lo=np.array(lo), row_hi=np.array(hi), col_lo=col_lo,
+                               col_hi=col_hi, family=np.array(["test"] * len(rows)))
+    best = math.inf
+    for bits in itertools.product((0.0, 1.0), repeat=k):
+        x = np.array(bits)
+        ax = prog.A @ x
+        if (np.all(x >= col_lo) and np.all(x <= col_hi) and np.all(ax >= prog.row_lo - 1e-9)
+                and np.all(ax <= prog.row_hi + 1e-9)):
+            best = min(best, float(prog.c @ x))
+    hint = (rng.random(k) < 0.5).astype(float)
+    res = make_backend("cpsat").solve(prog, 5.0, hint=hint)
+    if math.isinf(best):
+        assert res.status == "infeasible"
+    else:
+        assert res.status == "optimal"
+        assert res.objective == pytest.approx(best, abs=1e-6)
