@@ -481,6 +481,60 @@ def skip_inserts(points: np.ndarray, pose: Pose, params: LaneParams, graph: Sear
     return out
 
 
+def start_replacements(points: np.ndarray, pose: Pose, params: LaneParams,
+                       graph: SearchGraph, left: np.ndarray, right: np.ndarray,
+                       inside_m: float, pair_m: float = 0.0
+                       ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The lanes made from ``left``, ``right`` by replacing a boundary's first cone with a cone
+    inside the lane beside its first edge: a search-graph neighbour of the boundary's second
+    cone, in neither boundary, on the car's side of that boundary (left of the car for the
+    left one, by the car's heading, as ``find_starting_vertices`` takes them), whose closest
+    point on the first edge lies inside the edge and which lies on the lane's side of it, at
+    most ``inside_m`` metres from it, and more than ``pair_m`` metres from the second cone (a
+    cone that close to it is one of a close pair, ``pair_drops``' business). Only lanes that
+    satisfy the shared predicates (``lane_is_feasible``) are returned. Our addition,
+    docs/clc.md.
+
+    The start pair is the most symmetric about the car (IV-C), so when the car is off the
+    lane's centre a cone outside the boundary on the far side can pair better than the true
+    first cone, which the lane then leaves inside it (track 3 of the shared dataset, pose 38,
+    an unlabelled cone 1.5 m outside the right boundary). A true boundary leaves no cone
+    inside the lane beside it; this offers the judge the lane that starts at that cone."""
+    if inside_m <= 0:
+        return []
+    paths = [np.asarray(left, dtype=np.int64), np.asarray(right, dtype=np.int64)]
+    used = np.zeros(points.shape[0], dtype=bool)
+    used[paths[0]] = used[paths[1]] = True
+    out = []
+    for side, p in enumerate(paths):
+        if p.size < 2:
+            continue
+        a, b = points[p[0]], points[p[1]]
+        ab = b - a
+        length2 = float(ab @ ab)
+        if length2 <= 0:
+            continue
+        sign = -1.0 if side == 0 else 1.0  # the lane lies right of the left boundary
+        for v in graph.neighbours(int(p[1])):
+            if used[v]:
+                continue
+            lateral = pose.to_local(points[v:v + 1])[0, 1]
+            if (lateral > 0) != (side == 0):
+                continue
+            av = points[v] - a
+            t = float(av @ ab) / length2
+            inward = sign * float(ab[0] * av[1] - ab[1] * av[0]) / math.sqrt(length2)
+            if not (0.0 < t < 1.0 and 0.0 < inward <= inside_m):
+                continue
+            if math.hypot(*(points[v] - b)) <= pair_m:
+                continue
+            trial = list(paths)
+            trial[side] = np.concatenate([[v], p[1:]])
+            if lane_is_feasible(points[trial[0]], points[trial[1]], params):
+                out.append((trial[0], trial[1]))
+    return out
+
+
 def drop_ring_join(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
                    left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     """Drop the first cone of a boundary of a *closed* lane when RLD's objective of the closed

@@ -48,6 +48,7 @@ from clc.search import (
     pair_drops,
     path_ahead,
     skip_inserts,
+    start_replacements,
 )
 from rld.constraints import lane_is_feasible, starting_vertex_pairs
 from rld.costs import (
@@ -112,13 +113,17 @@ PAIR_DROP_M = 1.5
 #: is judged beside the dives (docs/clc.md, "Skipped cones taken in";
 #: ``lane.stats["skip_inserts"]``).
 SKIP_INSERTS = True
+#: In each dive round, the winner with a boundary's first cone replaced by a cone inside the
+#: lane beside its first edge, at most this far from it (metres; ``clc.search.
+#: start_replacements``; 0 turns it off; ``lane.stats["start_replacements"]``).
+START_REPLACE_M = 1.5
 #: A complete enumeration's pick is judged too, against its local edits only (the pair drops
 #: and the skipped cones taken in): a dive could only find a lane the ranker has already seen
 #: (docs/clc.md, "Skipped cones taken in").
 JUDGE_COMPLETE = True
 #: What ``ClcModel._dive_rounds`` counts, as ``lane.stats`` keys.
 ROUND_COUNTS = ("dives", "dive_rounds", "short_lane_rounds", "jog_dives", "pair_drops",
-                "skip_inserts")
+                "skip_inserts", "start_replacements")
 #: Drop a closed lane's join cone when the ring is cheaper without it (``drop_ring_join``).
 RING_JOIN = True
 
@@ -324,14 +329,16 @@ class ClcModel:
         Each round also judges the winner without one cone of each close pair within the reach
         (``clc.search.pair_drops``, PAIR_DROPS; open winners only): a false positive beside a
         true cone makes a short edge that the dives otherwise escape by dropping a true cone
-        elsewhere; and the winner with each skipped cone taken in (``clc.search.skip_inserts``,
-        SKIP_INSERTS; open winners only). ``search=False`` (a complete enumeration,
+        elsewhere; the winner with each skipped cone taken in (``clc.search.skip_inserts``,
+        SKIP_INSERTS; open winners only); and the winner with a boundary's first cone replaced
+        by a cone inside the lane beside its first edge (``clc.search.start_replacements``,
+        START_REPLACE_M; open winners only). ``search=False`` (a complete enumeration,
         JUDGE_COMPLETE) runs no dive: only these local edits are judged.
         Returns the final (left, right, closed, score), the counts (a dict keyed by
         ROUND_COUNTS, for ``lane.stats``: the dives run, the rounds run (a round that changes
         nothing ends them), the rounds whose winner was short, the jog dives among the dives,
-        the pair-drop and the skip-insert lanes judged), the dives' iterations, and whether
-        the deadline stopped them."""
+        the pair-drop, skip-insert and start-replacement lanes judged), the dives'
+        iterations, and whether the deadline stopped them."""
         p = self.params
         done: set[tuple] = set()
         counts = dict.fromkeys(ROUND_COUNTS, 0)
@@ -375,10 +382,14 @@ class ClcModel:
                        if SKIP_INSERTS and not winner[2] else [])
             counts["pair_drops"] += len(drops)
             counts["skip_inserts"] += len(inserts)
+            starts = (start_replacements(points, pose, p, res.graph, left, right,
+                                         START_REPLACE_M, PAIR_DROP_M)
+                      if START_REPLACE_M > 0 and not winner[2] else [])
+            counts["start_replacements"] += len(starts)
             # The lanes the judge weighs against the winner, in order (ties: the earlier lane):
             # the local edits (each scored by the ranker only if it wins), then each dive's
             # best.
-            contenders: list[tuple] = [(a, b, False, None) for a, b in drops + inserts]
+            contenders: list[tuple] = [(a, b, False, None) for a, b in drops + inserts + starts]
             for dive in dives:
                 counts["dives"] += 1
                 iterations += dive.iterations

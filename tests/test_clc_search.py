@@ -31,6 +31,7 @@ from clc.search import (
     ring_join_change,
     search_graph,
     skip_inserts,
+    start_replacements,
 )
 from rld import LaneParams, LaneSolver, LaneStatus, Pose, solve_lane
 from rld.constraints import c_seg, find_starting_vertices, lane_is_feasible
@@ -1377,6 +1378,53 @@ def test_skip_inserts_hand_worked():
     assert skip_inserts(pts, POSE, PARAMS, g, L, taken, 25.0) == []
     assert skip_inserts(pts, POSE, dataclasses.replace(PARAMS, skipped_cone_m=0.0), g, L, R,
                         25.0) == []
+
+
+def test_start_replacements_hand_worked():
+    """A straight lane 3.5 m wide, the car at the origin heading +x; left cones at x = 0 ..
+    15, right cones at x = 1 .. 16 (2.5 m apart) and cone 14 at (0, -3.2), 1.45 m outside the
+    right line. The lane whose right boundary starts at cone 14 leaves the true first right
+    cone 0.96 m inside its first edge: the lane starting there instead is offered. Not when
+    the limit is 0.9 m or the cone is within ``pair_m`` of the second cone, nor when it lies
+    outside the lane, nor when it is taken, nor when it is on the wrong side of the car."""
+    xs = np.arange(7) * 2.5
+    pts = np.vstack([np.column_stack([xs, np.full(7, 1.75)]),
+                     np.column_stack([xs + 1.0, np.full(7, -1.75)]), [[0.0, -3.2]]])
+    L, R = np.arange(7), np.array([14, 8, 9, 10, 11, 12, 13])
+    g = search_graph(pts, PARAMS)
+    got = start_replacements(pts, POSE, PARAMS, g, L, R, 1.5)
+    assert [(a.tolist(), b.tolist()) for a, b in got] == [(L.tolist(), list(range(7, 14)))]
+    assert start_replacements(pts, POSE, PARAMS, g, L, R, 0.9) == []
+    assert start_replacements(pts, POSE, PARAMS, g, L, R, 0.0) == []
+    # Cone 7 is 2.5 m from the second right cone: one of a close pair when that is closer.
+    assert len(start_replacements(pts, POSE, PARAMS, g, L, R, 1.5, pair_m=2.4)) == 1
+    assert start_replacements(pts, POSE, PARAMS, g, L, R, 1.5, pair_m=2.6) == []
+    # The left boundary, mirrored: the same on that side.
+    mirror = pts * np.array([1.0, -1.0])
+    got = start_replacements(mirror, POSE, PARAMS, search_graph(mirror, PARAMS), R, L, 1.5)
+    assert [(a.tolist(), b.tolist()) for a, b in got] == [(list(range(7, 14)), L.tolist())]
+    # Cone 7 outside the lane (beyond the first edge, away from it): nothing.
+    out = pts.copy()
+    out[7] = [1.0, -4.5]
+    assert start_replacements(out, POSE, PARAMS, search_graph(out, PARAMS), L, R, 1.5) == []
+    # Cone 7 already on the right boundary: nothing to take.
+    assert start_replacements(pts, POSE, PARAMS, g, L, np.array([14, 7, 8, 9]), 1.5) == []
+    # The car beside the lane's right line (y = -2): cone 7 is left of the car, not a right
+    # start (find_starting_vertices would not pair it on the right).
+    assert start_replacements(pts, Pose(0.0, -2.0, 0.0), PARAMS, g, L, R, 1.5) == []
+
+
+def test_start_replacement_takes_the_true_cone_track3(dataset_dir, monkeypatch):
+    """Track 3 at R = 30 m, pose 38 (every seed; here 10 % false positives, seed 0): the car
+    is 1.4 m from the right line and 2 m from the left, and an unlabelled cone 1.5 m outside
+    the right line pairs more symmetrically with the first left cone than the true first
+    right cone does (IV-C). The lane starts there, leaves the true cone 0.75 m inside its
+    first edge, skips the next one and diverges at once. Offered to the judge
+    (START_REPLACE_M), the lane starting at the true cone wins; without it, it does not."""
+    f, lane, off = _mended_by(dataset_dir, monkeypatch, 3, 0.1, 0, 38, "START_REPLACE_M",
+                              "start_replacements")
+    assert off.right[0] == 53 and lane.right[0] != 53
+    assert lane.right[0] in set(f.gt_right.tolist())
 
 
 def test_skip_insert_takes_the_true_cone_track4(dataset_dir, monkeypatch):
