@@ -117,8 +117,8 @@ SKIP_INSERTS = True
 #: lane beside its first edge, at most this far from it (metres; ``clc.search.
 #: start_replacements``; 0 turns it off; ``lane.stats["start_replacements"]``).
 START_REPLACE_M = 1.5
-#: A complete enumeration's pick is judged too, against its local edits only (the pair drops
-#: and the skipped cones taken in): a dive could only find a lane the ranker has already seen
+#: A complete enumeration's pick is judged too, against its local edits only (the pair drops,
+#: the skipped cones taken in and the start replacements): a dive could only find a lane the ranker has already seen
 #: (docs/clc.md, "Skipped cones taken in").
 JUDGE_COMPLETE = True
 #: What ``ClcModel._dive_rounds`` counts, as ``lane.stats`` keys.
