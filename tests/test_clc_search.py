@@ -1414,6 +1414,48 @@ def test_start_replacements_hand_worked():
     assert start_replacements(pts, Pose(0.0, -2.0, 0.0), PARAMS, g, L, R, 1.5) == []
 
 
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(8, 14), inside=st.floats(0.2, 3.0),
+       pair=st.floats(0.0, 3.0), pick=st.integers(0, 10**6))
+def test_start_replacements_match_shapely(seed, n, inside, pair, pick):
+    """On random lanes of random instances, the lanes offered are exactly those built from the
+    rule with shapely's geometry: for each boundary, every unused search-graph neighbour of
+    its second cone on its side of the car, whose projection on the first edge falls inside
+    it, within ``inside`` of it, on the lane's side (the triangle first cone, second cone,
+    cone turns clockwise for the left boundary), more than ``pair`` from the second cone,
+    with the first cone replaced by it and the lane feasible."""
+    from shapely.geometry import LinearRing, LineString, Point
+
+    pts = lane_instance(seed, n)
+    res = enumerate_candidates(pts, POSE, PARAMS, max_iterations=0)
+    if len(res.candidates) == 0:
+        return
+    L, R, _ = res.candidates[pick % len(res.candidates)]
+    got = start_replacements(pts, POSE, PARAMS, res.graph, L, R, inside, pair)
+    used = set(L.tolist()) | set(R.tolist())
+    want = []
+    for side, path in ((0, L), (1, R)):
+        if path.size < 2:
+            continue
+        edge = LineString(pts[path[:2]])
+        for v in res.graph.neighbours(int(path[1])).tolist():
+            if v in used or (pts[v, 1] > 0) != (side == 0):  # the car at the origin, +x
+                continue
+            t = edge.project(Point(pts[v]), normalized=True)
+            if not 0.0 < t < 1.0 or edge.distance(Point(pts[v])) > inside:
+                continue
+            ring = LinearRing([pts[path[0]], pts[path[1]], pts[v]])
+            if ring.is_ccw == (side == 0):  # left of the left boundary: outside the lane
+                continue
+            if np.hypot(*(pts[v] - pts[path[1]])) <= pair:
+                continue
+            trial = [L, R]
+            trial[side] = np.concatenate([[v], path[1:]])
+            if lane_is_feasible(pts[trial[0]], pts[trial[1]], PARAMS):
+                want.append((trial[0].tolist(), trial[1].tolist()))
+    assert [(a.tolist(), b.tolist()) for a, b in got] == want
+
+
 def test_start_replacement_takes_the_true_cone_track3(dataset_dir, monkeypatch):
     """Track 3 at R = 30 m, pose 38 (every seed; here 10 % false positives, seed 0): the car
     is 1.4 m from the right line and 2 m from the left, and an unlabelled cone 1.5 m outside
