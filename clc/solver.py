@@ -118,8 +118,8 @@ SKIP_INSERTS = True
 #: start_replacements``; 0 turns it off; ``lane.stats["start_replacements"]``).
 START_REPLACE_M = 1.5
 #: A complete enumeration's pick is judged too, against its local edits only (the pair drops,
-#: the skipped cones taken in and the start replacements): a dive could only find a lane the ranker has already seen
-#: (docs/clc.md, "Skipped cones taken in").
+#: the skipped cones taken in and the start replacements): a dive could only find a lane the
+#: ranker has already seen (docs/clc.md, "Skipped cones taken in").
 JUDGE_COMPLETE = True
 #: What ``ClcModel._dive_rounds`` counts, as ``lane.stats`` keys.
 ROUND_COUNTS = ("dives", "dive_rounds", "short_lane_rounds", "jog_dives", "pair_drops",
