@@ -510,24 +510,19 @@ def start_replacements(points: np.ndarray, pose: Pose, params: LaneParams,
         if p.size < 2:
             continue
         a, b = points[p[0]], points[p[1]]
-        ab = b - a
-        length2 = float(ab @ ab)
-        if length2 <= 0:
-            continue
-        sign = -1.0 if side == 0 else 1.0  # the lane lies right of the left boundary
-        for v in graph.neighbours(int(p[1])):
-            if used[v]:
-                continue
-            lateral = pose.to_local(points[v:v + 1])[0, 1]
-            if (lateral > 0) != (side == 0):
-                continue
-            av = points[v] - a
-            t = float(av @ ab) / length2
-            inward = sign * float(ab[0] * av[1] - ab[1] * av[0]) / math.sqrt(length2)
-            if not (0.0 < t < 1.0 and 0.0 < inward <= inside_m):
-                continue
-            if math.hypot(*(points[v] - b)) <= pair_m:
-                continue
+        nb = graph.neighbours(int(p[1]))
+        nb = nb[~used[nb]]
+        # On the boundary's side of the car, as find_starting_vertices takes a start cone.
+        nb = nb[(pose.to_local(points[nb])[:, 1] > 0) == (side == 0)]
+        q = points[nb]
+        t = geo.segment_parameter(q, a, b)
+        # The lane lies right of the left boundary (cross < 0), left of the right one.
+        cross = (b[0] - a[0]) * (q[:, 1] - a[1]) - (b[1] - a[1]) * (q[:, 0] - a[0])
+        inside = (cross < 0) if side == 0 else (cross > 0)
+        keep = ((t > 0.0) & (t < 1.0) & inside
+                & (geo.point_segment_distance(q, a, b) <= inside_m)
+                & (np.hypot(q[:, 0] - b[0], q[:, 1] - b[1]) > pair_m))
+        for v in nb[keep].tolist():
             trial = list(paths)
             trial[side] = np.concatenate([[v], p[1:]])
             if lane_is_feasible(points[trial[0]], points[trial[1]], params):
