@@ -453,6 +453,29 @@ def bench_clc(ranges: str, fp_rates: str, every: int, ranker: str | None, iterat
     _emit(text, out)
 
 
+
+@bench.command("clc-failures")
+@click.option("--ranges", default="30,50", show_default=True, help="Perception ranges, metres.")
+@click.option("--fp-rates", default="0.1,0.3", show_default=True)
+@click.option("--seed", "seeds", default="0", show_default=True,
+              help="Comma-separated seeds of the false positives, pooled.")
+@click.option("--every", default=1, show_default=True, help="Every k-th pose of each lap.")
+@click.option("--processes", default=2, show_default=True)
+@click.option("--out", default=None, help="Also write the Markdown table to this file.")
+def bench_clc_failures(ranges: str, fp_rates: str, seeds: str, every: int, processes: int,
+                       out: str | None) -> None:
+    """Where CLC's critical poses come from: the truth infeasible, the judge preferring the
+    wrong lane, or the search never building the truth (benchmarks/bench_clc_failures.py)."""
+    mod = _benchmark_module("bench_clc_failures")
+    try:
+        results = [mod.run(range_m=float(r), fp_rate=float(fp),
+                           seeds=[int(s) for s in seeds.split(",")], every=every,
+                           processes=processes)
+                   for r in ranges.split(",") for fp in fp_rates.split(",")]
+    except FileNotFoundError as exc:
+        raise click.ClickException(str(exc)) from exc
+    _emit(mod.to_markdown(results), out)
+
 if __name__ == "__main__":  # pragma: no cover
     main()
 

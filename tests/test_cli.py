@@ -49,6 +49,16 @@ def test_bench_incremental_quick(dataset_dir):
     assert "| 0% | all |" in result.output and "lane cones" in result.output
 
 
+def test_bench_clc_failures_quick(dataset_dir):
+    result = CliRunner().invoke(main, ["bench", "clc-failures", "--ranges", "30", "--fp-rates",
+                                       "0.3", "--every", "25", "--processes", "1"])
+    assert result.exit_code == 0, result.output
+    row = result.output.strip().splitlines()[-1]
+    assert row.startswith("| 30 m | 30% | ")
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    critical = int(cells[3].split()[0])
+    assert sum(int(c) for c in cells[4:7]) == critical  # every critical pose has one class
+
 def test_bench_budget_quick():
     result = CliRunner().invoke(main, ["bench", "budget", "--backends", "cpsat", "--sizes",
                                        "12", "--budgets", "0.05", "--tracks", "1",
