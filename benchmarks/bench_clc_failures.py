@@ -9,6 +9,9 @@ lane *from the lane's own start* (``truth_from_start``):
 - ``judge_prefers_wrong``: the true lane is feasible, and the dive judge (``clc.solver
   .dive_cost``: RLD's objective within ``DIVE_REACH_M`` of the car plus the roughness terms)
   scores it no better than the lane returned. A search that found the truth would not pick it.
+  Both lanes are costed as open sequences from their first cones (a closed truth, a ring, from
+  the cone the comparison starts at): the judge costs a closed lane whole, and a closed truth
+  would beat any open lane by its length alone, whatever happens near the car.
 - ``search_miss``: the true lane is feasible and the judge prefers it, but the search never
   built it (under ``max_iterations``, with the dives and local edits).
 
@@ -43,17 +46,19 @@ BEHIND_CONES = 2
 
 def truth_from_start(frame: Frame, left: np.ndarray, right: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray]:
-    """The true lane (frame indices) to compare the lane ``left``, ``right`` with: a closed
-    truth as it is; otherwise the protocol's truth cut to both sides' common extent
-    (``true_lane_extent``, as the IoU's), each side preceded by the true cones the lane starts
-    with when its first cone is one of the ``BEHIND_CONES`` true cones before the truth's first
-    (so that a lane starting one true cone earlier is not charged for it)."""
+    """The true lane (frame indices) to compare the lane ``left``, ``right`` with, per side:
+    the protocol's truth, an open one cut to both sides' common extent (``true_lane_extent``,
+    as the IoU's); when the lane's first cone is one of the ``BEHIND_CONES`` true cones before
+    the truth's first, an open truth is preceded by those cones and a closed one (a ring) is
+    rotated to start there, so that a lane starting a true cone earlier (which the protocol
+    allows) is compared from the same cone."""
     gl, gr = np.asarray(frame.gt_left, np.int64), np.asarray(frame.gt_right, np.int64)
-    if frame.gt_closed:
-        return gl, gr
-    kl, kr = true_lane_extent(frame.cones[gl], frame.cones[gr])
+    ring = frame.gt_closed
+    if not ring:
+        kl, kr = true_lane_extent(frame.cones[gl], frame.cones[gr])
+        gl, gr = gl[:kl], gr[:kr]
     out = []
-    for got, gt, seq in ((left, gl[:kl], frame.left_seq), (right, gr[:kr], frame.right_seq)):
+    for got, gt, seq in ((left, gl, frame.left_seq), (right, gr, frame.right_seq)):
         seq = np.asarray(seq, np.int64)
         if len(got) and gt.size:
             a, b = np.flatnonzero(seq == got[0]), np.flatnonzero(seq == gt[0])
@@ -61,7 +66,7 @@ def truth_from_start(frame: Frame, left: np.ndarray, right: np.ndarray
                 lead = (int(b[0]) - int(a[0])) % seq.size
                 pre = seq[(int(a[0]) + np.arange(lead)) % seq.size]
                 if 0 < lead <= BEHIND_CONES and np.all(pre >= 0):
-                    gt = np.concatenate([pre, gt])
+                    gt = np.roll(gt, lead) if ring else np.concatenate([pre, gt])
         out.append(gt)
     return out[0], out[1]
 
@@ -75,8 +80,8 @@ class Failure:
     pose: int
     kind: str
     cost_gap: float
-    """dive_cost(truth) - dive_cost(lane returned): positive where the judge prefers the lane
-    returned; nan where the truth is infeasible."""
+    """dive_cost(truth) - dive_cost(lane returned), both open: positive where the judge
+    prefers the lane returned; nan where the truth is infeasible."""
     closed_truth: bool
     side: str
     """"left" or "right": the side that leaves the truth first (nearest the car)."""
@@ -87,19 +92,22 @@ class Failure:
     false_positive: bool
 
 
-def classify(frame: Frame, left: np.ndarray, right: np.ndarray, closed: bool,
+def classify(frame: Frame, left: np.ndarray, right: np.ndarray,
              params: LaneParams) -> tuple[str, float]:
-    """The class of the lane ``left``, ``right`` (frame indices; ``closed`` a ring) against
-    ``frame``'s truth, and the judge's cost gap (truth minus lane; nan when infeasible)."""
+    """The class of the lane ``left``, ``right`` (frame indices) against ``frame``'s truth,
+    and the judge's cost gap (truth minus lane, both open from their first cones; nan when the
+    truth is infeasible)."""
     from clc.solver import dive_cost
 
     tl, tr = truth_from_start(frame, left, right)
     if len(tl) < 2 or len(tr) < 2 or not lane_is_feasible(frame.cones[tl], frame.cones[tr],
                                                           params, closed=frame.gt_closed):
         return "truth_infeasible", float("nan")
-    gap = (dive_cost(frame.cones, frame.pose, params, tl, tr, frame.gt_closed)
-           - dive_cost(frame.cones, frame.pose, params, np.asarray(left), np.asarray(right),
-                       closed))
+    # Both as open sequences from their start, so both are counted within the judge's reach:
+    # the judge costs a closed lane whole (``lane_cost``), which any closed truth would win
+    # against an open lane by its length alone, whatever happens near the car.
+    gap = (dive_cost(frame.cones, frame.pose, params, tl, tr)
+           - dive_cost(frame.cones, frame.pose, params, np.asarray(left), np.asarray(right)))
     return ("judge_prefers_wrong" if gap >= 0 else "search_miss"), float(gap)
 
 
@@ -137,7 +145,7 @@ def _job(args) -> list[Failure]:
         sc = score_lane(frame, lane.left, lane.right, lane.ok, lane.closed)
         if sc.category_tolerant != "diverging_lt20" or not lane.ok:
             continue
-        kind, gap = classify(frame, lane.left, lane.right, lane.closed, params)
+        kind, gap = classify(frame, lane.left, lane.right, params)
         where = _leaves(frame, lane.left, lane.right) or ("", -1, float("nan"), False)
         out.append(Failure(tid, seed, k, kind, gap, frame.gt_closed, *where))
     return out

@@ -58,26 +58,45 @@ def test_truth_from_start_is_the_compared_truth(frame):
         assert np.array_equal(B.truth_from_start(frame, far, frame.gt_right)[0], tl)
 
 
+
+def test_truth_from_start_rotates_a_closed_truth():
+    lap = simulate_lap(generate_track(3), range_m=50.0, fp_rate=0.3, seed=0)
+    f = lap.frame(len(lap) - 5)
+    assert f.gt_closed
+    tl, tr = B.truth_from_start(f, f.gt_left, f.gt_right)
+    assert np.array_equal(tl, f.gt_left) and np.array_equal(tr, f.gt_right)
+    # A lane starting one true cone before the ring's first: the ring is compared from there,
+    # and the lane that is that ring leaves it nowhere.
+    early = np.r_[f.gt_left[-1], f.gt_left[:-1]]
+    el, _ = B.truth_from_start(f, early, f.gt_right)
+    assert np.array_equal(el, early)
+    assert B._leaves(f, early, f.gt_right) is None
+    # Three cones before is past BEHIND_CONES: compared with the ring as it is, and the lane
+    # leaves it at its first cone.
+    late = np.roll(f.gt_left, 3)
+    assert np.array_equal(B.truth_from_start(f, late, f.gt_right)[0], f.gt_left)
+    assert B._leaves(f, late, f.gt_right)[:2] == ("left", 0)
+
 def test_classes(frame):
     tl, tr = _truth(frame)
     # The truth itself: the judge cannot prefer it to itself (gap 0), so never a search miss.
-    kind, gap = B.classify(frame, tl, tr, False, PARAMS)
+    kind, gap = B.classify(frame, tl, tr, PARAMS)
     assert (kind, gap) == ("judge_prefers_wrong", 0.0)
     # A lane whose left side stops after 4 cones, within the judge's reach: the truth earns
     # more edge benefit there, so the judge prefers it, by the difference of the dive costs.
     short = tl[:4]
-    kind, gap = B.classify(frame, short, tr, False, PARAMS)
+    kind, gap = B.classify(frame, short, tr, PARAMS)
     want = (dive_cost(frame.cones, frame.pose, PARAMS, tl, tr)
             - dive_cost(frame.cones, frame.pose, PARAMS, short, tr))
     assert want < 0
     assert kind == "search_miss"
     assert gap == pytest.approx(want)
     # Cut beyond the reach (DIVE_REACH_M) the judge sees no difference: not a search miss.
-    kind, gap = B.classify(frame, tl[:-2], tr, False, PARAMS)
+    kind, gap = B.classify(frame, tl[:-2], tr, PARAMS)
     assert (kind, gap) == ("judge_prefers_wrong", 0.0)
     # The same truth under a maximum width below the lane's: infeasible, no gap.
     narrow = replace(PARAMS, max_width_m=2.0, min_width_m=1.0)
-    kind, gap = B.classify(frame, short, tr, False, narrow)
+    kind, gap = B.classify(frame, short, tr, narrow)
     assert kind == "truth_infeasible" and math.isnan(gap)
 
 
