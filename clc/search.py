@@ -31,13 +31,12 @@ from rld.types import LaneParams, Pose
 
 __all__ = ["SearchGraph", "SearchResult", "CandidateList", "closable", "merge_results",
            "search_graph", "enumerate_candidates", "contested_dives", "claim_dive", "dive_at",
-           "pair_drops", "skip_inserts", "GRAPHS"]
+           "pair_drops", "outward_drops", "skip_inserts", "start_replacements", "GRAPHS"]
 
 #: Search-graph constructions: ``radius`` (IV-A, the paper's choice) and ``delaunay`` (IV-B).
 GRAPHS = ("radius", "delaunay")
-#: ``drop_detours`` keeps a cone with a boundary neighbour nearer than this (metres): two
-#: detections that close are one cone seen twice or a cone and a false positive beside it,
-#: which the objective cannot tell apart (dropping the true one of such a pair was measured).
+#: Two detections nearer than this (metres) are one cone seen twice or a cone and a false
+#: positive beside it, which RLD's objective cannot tell apart (``pair_drops``' default).
 DUPLICATE_M = 1.0
 
 
@@ -359,55 +358,6 @@ def closable(g: SearchGraph, left: np.ndarray, right: np.ndarray) -> bool:
             and g.has_edge(int(right[-1]), int(right[0])))
 
 
-def drop_detours(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
-                 left: np.ndarray, right: np.ndarray, reach_m: float,
-                 max_drops: int = 4) -> tuple[np.ndarray, np.ndarray, int]:
-    """Drop from a lane, one at a time, the cone whose removal lowers RLD's objective most
-    (eq. 29 through ``rld.costs.open_path_costs``, the judge of the dives) while the lane still
-    satisfies the shared predicates (``lane_is_feasible``); at most ``max_drops``. Our
-    addition, docs/clc.md. Only cones where the boundary bends outward, away from the lane,
-    within ``reach_m`` of path ahead of the car, with no boundary neighbour nearer than
-    ``DUPLICATE_M`` and an edge of the search graph joining their two neighbours
-    (``_detour_head``). The search takes a false positive off the line between two true cones
-    when the next-vertex decider ranks it first, and no close call flags it when the true next
-    cone scored well behind; a true cone on the inside of a hairpin bends the boundary toward
-    the lane, so it is never a candidate. Returns (left, right, cones dropped)."""
-    paths = [np.asarray(left, dtype=np.int64), np.asarray(right, dtype=np.int64)]
-    heads = [_detour_head(points, pose, graph, p, side, reach_m) for side, p in enumerate(paths)]
-    dropped = 0
-    while dropped < max_drops:
-        # One batch for both sides: each side's head, then the head without each cone j.
-        seqs, owner = [], []
-        for side, (head, js) in enumerate(heads):
-            if js:
-                seqs += [head] + [np.delete(head, j) for j in js]
-                owner += [(side, -1)] + [(side, j) for j in js]
-        if not seqs:
-            break
-        ptr = np.concatenate([[0], np.cumsum([q.size for q in seqs])])
-        cost = open_path_costs(points, np.concatenate(seqs), ptr, pose, params)
-        options, base = [], {}
-        for c, (side, j) in zip(cost.tolist(), owner, strict=True):
-            if j < 0:
-                base[side] = c
-            else:
-                options.append((c - base[side], side, j))
-        applied = False
-        for delta, side, j in sorted(options):
-            if delta >= -1e-9:
-                break
-            trial = list(paths)
-            trial[side] = np.delete(paths[side], j)
-            if lane_is_feasible(points[trial[0]], points[trial[1]], params):
-                paths, applied = trial, True
-                heads[side] = _detour_head(points, pose, graph, trial[side], side, reach_m)
-                dropped += 1
-                break
-        if not applied:
-            break
-    return paths[0], paths[1], dropped
-
-
 def pair_drops(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
                left: np.ndarray, right: np.ndarray, reach_m: float,
                pair_m: float = DUPLICATE_M) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -420,10 +370,11 @@ def pair_drops(points: np.ndarray, pose: Pose, params: LaneParams, graph: Search
     shared predicates (``lane_is_feasible``) are returned. Our addition, docs/clc.md.
 
     Such a pair is one cone and a false positive beside it (or one cone seen twice), which RLD's
-    objective cannot tell apart, so ``drop_detours`` leaves them alone (``DUPLICATE_M``). But a
-    lane that keeps both pays for the short edge between them, and a dive that drops a *true*
-    cone elsewhere to avoid it can then win the judge. Offered to the judge beside the dives
-    (``clc.solver.PAIR_DROPS``), the lane with one of the pair is compared with them."""
+    objective cannot tell apart, and neither cone need bend the boundary away from the lane
+    (``outward_drops``). But a lane that keeps both pays for the short edge between them, and
+    a dive that drops a *true* cone elsewhere to avoid it can then win the judge. Offered to
+    the judge beside the dives (``clc.solver.PAIR_DROPS``), the lane with one of the pair is
+    compared with them."""
     paths = [np.asarray(left, dtype=np.int64), np.asarray(right, dtype=np.int64)]
     out = []
     for side, p in enumerate(paths):
@@ -445,6 +396,48 @@ def pair_drops(points: np.ndarray, pose: Pose, params: LaneParams, graph: Search
                     out.append((trial[0], trial[1]))
     return out
 
+
+def outward_drops(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
+                  left: np.ndarray, right: np.ndarray,
+                  reach_m: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The lanes made from ``left``, ``right`` by dropping one cone that bends its boundary
+    away from the lane: an interior cone path[k] of the dive judge's window of ``reach_m``
+    (``rld.costs.within_radius``) without which the lane polygon (``geometry.lane_ring``) has
+    less area. Removing it takes off the triangle path[k-1], path[k], path[k+1] (shoelace,
+    ``geometry.signed_area``); the polygon shrinks when that triangle turns the way the whole
+    polygon does: the cone lies outside the chord path[k-1] -> path[k+1], and the lane without
+    it is narrower there, never wider. For a lane whose left boundary lies to the left (a
+    clockwise polygon), the boundary turns toward the lane at such a cone
+    (``geometry.turn_angles``: right on the left boundary, left on the right one). Only when an
+    edge of the search graph joins the two neighbours and the lane satisfies the shared
+    predicates (``lane_is_feasible``). Our addition, docs/clc.md.
+
+    A false positive inserted between two true cones of a boundary, or taken in their place
+    a little off the line, earns the edge benefit of RLD's objective, and the dives, which
+    change one choice of the search at a time, often do not return the lane without it. A
+    cone bending the boundary *into* the lane is never dropped: true cones do that at a
+    hairpin's apex, where the judge would rather cut the corner (and a lane without such a
+    cone would lead the car over it)."""
+    paths = [np.ascontiguousarray(left, dtype=np.int64),
+             np.ascontiguousarray(right, dtype=np.int64)]
+    orient = np.sign(geo.signed_area(geo.lane_ring(points[paths[0]], points[paths[1]])))
+    out = []
+    for side, p in enumerate(paths):
+        head = within_radius(points, p, pose, reach_m).size
+        ks = np.arange(1, min(head, p.size - 1))
+        if ks.size == 0 or orient == 0:
+            continue
+        turn = geo.turn_angles(points[p[ks - 1]], points[p[ks]], points[p[ks + 1]])
+        # The right boundary runs backwards in the ring, so its triangles turn the other way.
+        shrinks = np.sign(turn) * (1.0 if side == 0 else -1.0) == orient
+        for k in ks[shrinks]:
+            if not graph.has_edge(int(p[k - 1]), int(p[k + 1])):
+                continue
+            trial = list(paths)
+            trial[side] = np.delete(p, k)
+            if lane_is_feasible(points[trial[0]], points[trial[1]], params):
+                out.append((trial[0], trial[1]))
+    return out
 
 def skip_inserts(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
                  left: np.ndarray, right: np.ndarray,
@@ -540,7 +533,7 @@ def drop_ring_join(points: np.ndarray, pose: Pose, params: LaneParams, graph: Se
     The search starts each boundary at a start vertex (IV-C). When a false positive beside the
     car pairs better with the other side than the true cone next to it, the closed lane keeps
     it as a detour between the boundary's last true cone and its first one: the ring's join,
-    which the open-lane ``drop_detours`` does not see. Only the terms around the join change
+    which the open-lane ``outward_drops`` does not see. Only the terms around the join change
     (the edges into and out of the cone, the turns at it and at its two neighbours), so the
     objective's change is computed on the five cones around it (``open_path_costs``); rings of
     fewer than five cones are left alone. Each side once, left first; returns (left, right,
@@ -573,17 +566,3 @@ def ring_join_change(points: np.ndarray, pose: Pose, params: LaneParams,
     seqs = np.array([p[-2], p[-1], p[0], p[1], p[2], p[-2], p[-1], p[1], p[2]])
     cost = open_path_costs(points, seqs, np.array([0, 5, 9]), pose, params)
     return float(cost[1] - cost[0])
-
-
-def _detour_head(points: np.ndarray, pose: Pose, graph: SearchGraph, path: np.ndarray,
-                 side: int, reach_m: float) -> tuple[np.ndarray, list[int]]:
-    """The part of ``path`` that decides ``drop_detours`` and the positions j in it that may be
-    dropped (``search_kernels.detour_positions``). Dropping cone j changes the objective's
-    terms of cones j - 2 .. j + 2 only, so the part up to two cones past the last position
-    decides."""
-    path = np.ascontiguousarray(path, dtype=np.int64)
-    js = sk.detour_positions(points, graph.indptr, graph.indices, path, side,
-                             float(reach_m) + _arc_behind(points, path, pose), DUPLICATE_M)
-    if js.size == 0:
-        return path[:0], []
-    return path[:min(path.size, int(js[-1]) + 3)], js.tolist()

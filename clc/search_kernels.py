@@ -55,7 +55,6 @@ from rld.geometry_kernels import (
     grow_2d,
     grow_int,
     grow_rows,
-    orient,
     point_segment_distance,
     point_segment_param,
     ring_edges_touch,
@@ -339,39 +338,6 @@ def skipped_cones(pts, adj_ptr, adj_idx, path, other, tol, reach):
             cones[m] = best
             m += 1
     return out[:m], cones[:m]
-
-
-@njit(cache=True)
-def detour_positions(pts, adj_ptr, adj_idx, path, side, reach, min_step):
-    """Positions j of ``path`` (a left boundary for ``side`` 0, right for 1) whose cone
-    ``clc.search.drop_detours`` may drop: interior (0 < j < len - 1), within ``reach`` metres
-    of path length from its start, the boundary bending outward there (away from the lane: a
-    right turn on the left side, a left turn on the right side), both edges at j at least
-    ``min_step`` metres, and a search-graph edge joining path[j - 1] and path[j + 1]. Returns
-    the positions in order."""
-    n = path.shape[0]
-    out = np.empty(max(n - 2, 0), dtype=np.int64)
-    m = 0
-    arc = 0.0
-    for j in range(1, n - 1):
-        a, b, c = path[j - 1], path[j], path[j + 1]
-        s1 = math.hypot(pts[b, 0] - pts[a, 0], pts[b, 1] - pts[a, 1])
-        arc += s1
-        if arc > reach:
-            break
-        s2 = math.hypot(pts[c, 0] - pts[b, 0], pts[c, 1] - pts[b, 1])
-        if s1 < min_step or s2 < min_step:
-            continue
-        # The shared orientation test: > 0 when a -> b -> c turns left.
-        cr = orient(pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1], pts[c, 0], pts[c, 1])
-        if (side == 0 and cr >= 0.0) or (side == 1 and cr <= 0.0):
-            continue
-        for s in range(adj_ptr[a], adj_ptr[a + 1]):
-            if adj_idx[s] == c:
-                out[m] = j
-                m += 1
-                break
-    return out[:m]
 
 
 @njit(cache=True)

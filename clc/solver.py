@@ -41,10 +41,10 @@ from clc.search import (
     closable,
     contested_dives,
     dive_at,
-    drop_detours,
     drop_ring_join,
     enumerate_candidates,
     merge_results,
+    outward_drops,
     pair_drops,
     path_ahead,
     skip_inserts,
@@ -80,9 +80,6 @@ DIVE_ROUNDS = 3
 #: (docs/clc.md, "Jog dives").
 JOG_THRESHOLD_M = 1.0
 JOG_DIVES = 2
-#: After the dives, drop the outward detours of the winner that RLD's objective prefers
-#: without (``clc.search.drop_detours``; ``lane.stats["dropped"]``).
-DROP_DETOURS = True
 #: The runner-up start pairs (``LaneParams.start_pairs``) are searched while the best
 #: candidate so far has fewer than this many cones on its shorter side; the deepest wins (ties:
 #: the more symmetric pair).
@@ -121,9 +118,14 @@ START_REPLACE_M = 1.5
 #: the skipped cones taken in and the start replacements): a dive could only find a lane the
 #: ranker has already seen (docs/clc.md, "Skipped cones taken in").
 JUDGE_COMPLETE = True
+#: After the dive rounds, up to this many passes in which the winner without one cone that
+#: bends its boundary away from the lane (``clc.search.outward_drops``) is judged; the
+#: cheapest such lane, if cheaper, wins the pass (docs/clc.md, "Outward drops";
+#: ``lane.stats["outward_drops"]``). 0 turns it off.
+OUTWARD_DROP_PASSES = 2
 #: What ``ClcModel._dive_rounds`` counts, as ``lane.stats`` keys.
 ROUND_COUNTS = ("dives", "dive_rounds", "short_lane_rounds", "jog_dives", "pair_drops",
-                "skip_inserts", "start_replacements")
+                "skip_inserts", "start_replacements", "outward_drops")
 #: Drop a closed lane's join cone when the ring is cheaper without it (``drop_ring_join``).
 RING_JOIN = True
 
@@ -334,11 +336,14 @@ class ClcModel:
         by a cone inside the lane beside its first edge (``clc.search.start_replacements``,
         START_REPLACE_M; open winners only). ``search=False`` (a complete enumeration,
         JUDGE_COMPLETE) runs no dive: only these local edits are judged.
+        After the rounds, up to OUTWARD_DROP_PASSES passes judge the winner without one cone
+        that bends its boundary away from the lane (``clc.search.outward_drops``; open
+        winners only, none past the deadline).
         Returns the final (left, right, closed, score), the counts (a dict keyed by
         ROUND_COUNTS, for ``lane.stats``: the dives run, the rounds run (a round that changes
         nothing ends them), the rounds whose winner was short, the jog dives among the dives,
-        the pair-drop, skip-insert and start-replacement lanes judged), the dives'
-        iterations, and whether the deadline stopped them."""
+        the pair-drop, skip-insert, start-replacement and outward-drop lanes judged), the
+        dives' iterations, and whether the deadline stopped them."""
         p = self.params
         done: set[tuple] = set()
         counts = dict.fromkeys(ROUND_COUNTS, 0)
@@ -413,6 +418,28 @@ class ClcModel:
                 break
             winner, cost = best, best_cost
         counts["dive_rounds"] = rounds
+        # Outward drops, after the rounds: offered within them, a drop that wins a round sends
+        # the next round's dives elsewhere, and the lanes they reach were worse (docs/clc.md).
+        for _ in range(OUTWARD_DROP_PASSES):
+            if winner[2] or time.perf_counter() > deadline:
+                break
+            trials = outward_drops(points, pose, p, res.graph, winner[0], winner[1],
+                                   DIVE_REACH_M)
+            counts["outward_drops"] += len(trials)
+            if not trials:
+                break
+            if cost is None:
+                cost = dive_cost(points, pose, p, *winner[:3])
+            best, best_cost = None, cost
+            for a, b in trials:
+                dc = dive_cost(points, pose, p, a, b)
+                if dc < best_cost:
+                    best, best_cost = (a, b), dc
+            if best is None:
+                break
+            f = ranking_features(points[best[0]], points[best[1]])[None, :]
+            sc = float(self.ranker.score(points, pose, p, [(best[0], best[1], False)], f)[0])
+            winner, cost = (best[0].copy(), best[1].copy(), False, sc), best_cost
         return (*winner, counts, iterations, cut or bool(stopped))
 
     def solve(self, points: np.ndarray, pose: Pose, colors=None, time_limit_s=None,
@@ -493,9 +520,6 @@ class ClcModel:
             iterations += it
         stats.update(counts, iterations=iterations)
         stats["dropped"] = 0
-        if not res.complete and not closed and DROP_DETOURS:
-            left, right, stats["dropped"] = drop_detours(points, pose, self.params, res.graph,
-                                                         left, right, DIVE_REACH_M)
         if not closed and closable(res.graph, left, right):
             closed = lane_is_feasible(points[left], points[right], self.params, closed=True)
         if closed and RING_JOIN:

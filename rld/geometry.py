@@ -278,6 +278,17 @@ def lane_ring(left: np.ndarray, right: np.ndarray) -> np.ndarray:
     return np.vstack([np.asarray(left, float).reshape(-1, 2), np.asarray(right, float)[::-1]])
 
 
+
+def signed_area(ring: np.ndarray) -> float:
+    """Signed area (square metres) of the polygon through the (k, 2) vertices ``ring`` in order
+    (closed implicitly): positive counter-clockwise, negative clockwise (the shoelace formula).
+    A lane ring (``lane_ring``) whose left boundary lies to the left is clockwise."""
+    xy = np.asarray(ring, dtype=np.float64).reshape(-1, 2)
+    if xy.shape[0] < 3:
+        return 0.0
+    x, y = xy[:, 0], xy[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
 def polygonal_part(geom):
     """The polygonal part of a shapely geometry (drops points and lines), as one geometry."""
     if geom.is_empty:

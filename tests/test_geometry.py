@@ -986,3 +986,26 @@ def test_pairs_within_finds_pairs_across_cell_edges():
     want = {(i, j) for i in range(len(xs)) for j in range(i + 1, len(xs))
             if math.hypot(*(pts[j] - pts[i])) <= r}
     assert got == want
+
+
+def test_signed_area_hand_worked():
+    square = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 3.0], [0.0, 3.0]])
+    assert geo.signed_area(square) == pytest.approx(6.0)
+    assert geo.signed_area(square[::-1]) == pytest.approx(-6.0)
+    assert geo.signed_area(square[:2]) == 0.0
+    # A lane along +x, left boundary at y = 2 and right at y = -2: clockwise.
+    left = np.array([[0.0, 2.0], [5.0, 2.0]])
+    right = np.array([[0.0, -2.0], [5.0, -2.0]])
+    assert geo.signed_area(geo.lane_ring(left, right)) == pytest.approx(-20.0)
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.lists(st.tuples(st.floats(-50, 50), st.floats(-50, 50)), min_size=3, max_size=12))
+def test_signed_area_matches_shapely_on_simple_rings(pts):
+    ring = np.array(pts, dtype=np.float64)
+    r = LinearRing(ring)
+    assume(r.is_valid and r.is_simple)
+    a = geo.signed_area(ring)
+    assert abs(a) == pytest.approx(Polygon(ring).area, rel=1e-9, abs=1e-9)
+    assume(abs(a) > 1e-6)
+    assert (a > 0) == r.is_ccw
