@@ -386,15 +386,24 @@ def pair_drops(points: np.ndarray, pose: Pose, params: LaneParams, graph: Search
             if math.hypot(d[0], d[1]) >= pair_m:
                 continue
             for k in (j, j + 1):
-                if k == 0:
-                    continue
-                if k < p.size - 1 and not graph.has_edge(int(p[k - 1]), int(p[k + 1])):
-                    continue
-                trial = list(paths)
-                trial[side] = np.delete(p, k)
-                if lane_is_feasible(points[trial[0]], points[trial[1]], params):
-                    out.append((trial[0], trial[1]))
+                if k > 0:
+                    out += _drop(points, params, graph, paths, side, k)
     return out
+
+
+def _drop(points: np.ndarray, params: LaneParams, graph: SearchGraph, paths: list,
+          side: int, k: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The lane ``paths`` without cone ``k`` of side ``side``, as a one-element list, when an
+    interior cone's two neighbours are joined by a search-graph edge and the lane satisfies
+    the shared predicates (``lane_is_feasible``); else an empty list."""
+    p = paths[side]
+    if k < p.size - 1 and not graph.has_edge(int(p[k - 1]), int(p[k + 1])):
+        return []
+    trial = list(paths)
+    trial[side] = np.delete(p, k)
+    if lane_is_feasible(points[trial[0]], points[trial[1]], params):
+        return [(trial[0], trial[1])]
+    return []
 
 
 def outward_drops(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
@@ -431,13 +440,9 @@ def outward_drops(points: np.ndarray, pose: Pose, params: LaneParams, graph: Sea
         # The right boundary runs backwards in the ring, so its triangles turn the other way.
         shrinks = np.sign(turn) * (1.0 if side == 0 else -1.0) == orient
         for k in ks[shrinks]:
-            if not graph.has_edge(int(p[k - 1]), int(p[k + 1])):
-                continue
-            trial = list(paths)
-            trial[side] = np.delete(p, k)
-            if lane_is_feasible(points[trial[0]], points[trial[1]], params):
-                out.append((trial[0], trial[1]))
+            out += _drop(points, params, graph, paths, side, int(k))
     return out
+
 
 def skip_inserts(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
                  left: np.ndarray, right: np.ndarray,
