@@ -360,14 +360,16 @@ def closable(g: SearchGraph, left: np.ndarray, right: np.ndarray) -> bool:
 
 def pair_drops(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
                left: np.ndarray, right: np.ndarray, reach_m: float,
-               pair_m: float = DUPLICATE_M) -> list[tuple[np.ndarray, np.ndarray]]:
+               pair_m: float = DUPLICATE_M,
+               check: bool = True) -> list[tuple[np.ndarray, np.ndarray]]:
     """The lanes made from ``left``, ``right`` by dropping one cone of a close pair: for every
     two consecutive cones of a boundary nearer than ``pair_m`` (metres), the first of them in
     the dive judge's window of ``reach_m`` (``rld.costs.within_radius``: up to and with the
     first cone farther from the car), the lane without the first and the lane without the
     second. A start vertex is never dropped; an interior cone only
     when an edge of the search graph joins its two neighbours; and only lanes that satisfy the
-    shared predicates (``lane_is_feasible``) are returned. Our addition, docs/clc.md.
+    shared predicates (``lane_is_feasible``) are returned (``check=False``: left to the caller).
+    Our addition, docs/clc.md.
 
     Such a pair is one cone and a false positive beside it (or one cone seen twice), which RLD's
     objective cannot tell apart, and neither cone need bend the boundary away from the lane
@@ -387,28 +389,28 @@ def pair_drops(points: np.ndarray, pose: Pose, params: LaneParams, graph: Search
                 continue
             for k in (j, j + 1):
                 if k > 0:
-                    out += _drop(points, params, graph, paths, side, k)
+                    out += _drop(points, params, graph, paths, side, k, check)
     return out
 
 
 def _drop(points: np.ndarray, params: LaneParams, graph: SearchGraph, paths: list,
-          side: int, k: int) -> list[tuple[np.ndarray, np.ndarray]]:
+          side: int, k: int, check: bool = True) -> list[tuple[np.ndarray, np.ndarray]]:
     """The lane ``paths`` without cone ``k`` of side ``side``, as a one-element list, when an
-    interior cone's two neighbours are joined by a search-graph edge and the lane satisfies
-    the shared predicates (``lane_is_feasible``); else an empty list."""
+    interior cone's two neighbours are joined by a search-graph edge and (``check``) the lane
+    satisfies the shared predicates (``lane_is_feasible``); else an empty list."""
     p = paths[side]
     if k < p.size - 1 and not graph.has_edge(int(p[k - 1]), int(p[k + 1])):
         return []
     trial = list(paths)
     trial[side] = np.delete(p, k)
-    if lane_is_feasible(points[trial[0]], points[trial[1]], params):
+    if not check or lane_is_feasible(points[trial[0]], points[trial[1]], params):
         return [(trial[0], trial[1])]
     return []
 
 
 def outward_drops(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
-                  left: np.ndarray, right: np.ndarray,
-                  reach_m: float) -> list[tuple[np.ndarray, np.ndarray]]:
+                  left: np.ndarray, right: np.ndarray, reach_m: float,
+                  check: bool = True) -> list[tuple[np.ndarray, np.ndarray]]:
     """The lanes made from ``left``, ``right`` by dropping one cone that bends its boundary
     away from the lane: an interior cone path[k] of the dive judge's window of ``reach_m``
     (``rld.costs.within_radius``) without which the lane polygon (``geometry.lane_ring``) has
@@ -419,7 +421,8 @@ def outward_drops(points: np.ndarray, pose: Pose, params: LaneParams, graph: Sea
     clockwise polygon), the boundary turns toward the lane at such a cone
     (``geometry.turn_angles``: right on the left boundary, left on the right one). Only when an
     edge of the search graph joins the two neighbours and the lane satisfies the shared
-    predicates (``lane_is_feasible``). Our addition, docs/clc.md.
+    predicates (``lane_is_feasible``; ``check=False`` leaves that to the caller, who may need
+    it for one lane only). Our addition, docs/clc.md.
 
     A false positive inserted between two true cones of a boundary, or taken in their place
     a little off the line, earns the edge benefit of RLD's objective, and the dives, which
@@ -440,13 +443,13 @@ def outward_drops(points: np.ndarray, pose: Pose, params: LaneParams, graph: Sea
         # The right boundary runs backwards in the ring, so its triangles turn the other way.
         shrinks = np.sign(turn) * (1.0 if side == 0 else -1.0) == orient
         for k in ks[shrinks]:
-            out += _drop(points, params, graph, paths, side, int(k))
+            out += _drop(points, params, graph, paths, side, int(k), check)
     return out
 
 
 def skip_inserts(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
-                 left: np.ndarray, right: np.ndarray,
-                 reach_m: float) -> list[tuple[np.ndarray, np.ndarray]]:
+                 left: np.ndarray, right: np.ndarray, reach_m: float,
+                 check: bool = True) -> list[tuple[np.ndarray, np.ndarray]]:
     """The lanes made from ``left``, ``right`` by taking in a skipped cone: for every edge
     path[j-1] -> path[j] of a boundary within ``reach_m`` of path ahead of the car that passes
     a cone in neither boundary, a search-graph neighbour of path[j-1] and of path[j] whose
@@ -474,14 +477,14 @@ def skip_inserts(points: np.ndarray, pose: Pose, params: LaneParams, graph: Sear
                 continue
             trial = list(paths)
             trial[side] = np.insert(p, j, v)
-            if lane_is_feasible(points[trial[0]], points[trial[1]], params):
+            if not check or lane_is_feasible(points[trial[0]], points[trial[1]], params):
                 out.append((trial[0], trial[1]))
     return out
 
 
 def start_replacements(points: np.ndarray, pose: Pose, params: LaneParams,
                        graph: SearchGraph, left: np.ndarray, right: np.ndarray,
-                       inside_m: float, pair_m: float = 0.0
+                       inside_m: float, pair_m: float = 0.0, check: bool = True
                        ) -> list[tuple[np.ndarray, np.ndarray]]:
     """The lanes made from ``left``, ``right`` by replacing a boundary's first cone with a cone
     inside the lane beside its first edge: a search-graph neighbour of the boundary's second
@@ -523,7 +526,7 @@ def start_replacements(points: np.ndarray, pose: Pose, params: LaneParams,
         for v in nb[keep].tolist():
             trial = list(paths)
             trial[side] = np.concatenate([[v], p[1:]])
-            if lane_is_feasible(points[trial[0]], points[trial[1]], params):
+            if not check or lane_is_feasible(points[trial[0]], points[trial[1]], params):
                 out.append((trial[0], trial[1]))
     return out
 

@@ -380,15 +380,17 @@ class ClcModel:
                 counts["jog_dives"] += len(jogs)
                 dives += jogs
             # The local edits of an open winner: the pair drops, then the skip inserts.
+            # Unchecked (check=False): the predicates only for a lane the judge prefers, below.
             drops = (pair_drops(points, pose, p, res.graph, left, right, DIVE_REACH_M,
-                                PAIR_DROP_M)
+                                PAIR_DROP_M, check=False)
                      if PAIR_DROPS and not winner[2] else [])
-            inserts = (skip_inserts(points, pose, p, res.graph, left, right, DIVE_REACH_M)
+            inserts = (skip_inserts(points, pose, p, res.graph, left, right, DIVE_REACH_M,
+                                    check=False)
                        if SKIP_INSERTS and not winner[2] else [])
             counts["pair_drops"] += len(drops)
             counts["skip_inserts"] += len(inserts)
             starts = (start_replacements(points, pose, p, res.graph, left, right,
-                                         START_REPLACE_M, PAIR_DROP_M)
+                                         START_REPLACE_M, PAIR_DROP_M, check=False)
                       if START_REPLACE_M > 0 and not winner[2] else [])
             counts["start_replacements"] += len(starts)
             # The lanes the judge weighs against the winner, in order (ties: the earlier lane):
@@ -410,6 +412,10 @@ class ClcModel:
                     cost = best_cost = dive_cost(points, pose, p, *winner[:3])
                 dc = dive_cost(points, pose, p, a, b, c)
                 if dc < best_cost:
+                    # A local edit (sc None) is checked here, only when it would win: the same
+                    # pick as offering the feasible ones only (a dive's lanes are feasible).
+                    if sc is None and not lane_is_feasible(points[a], points[b], p):
+                        continue
                     if sc is None:
                         f = ranking_features(points[a], points[b])[None, :]
                         sc = float(self.ranker.score(points, pose, p, [(a, b, c)], f)[0])
@@ -423,18 +429,24 @@ class ClcModel:
         for _ in range(OUTWARD_DROP_PASSES):
             if winner[2] or time.perf_counter() > deadline:
                 break
+            # The predicates only for the lanes the judge prefers, cheapest first (each check
+            # costs more than the judge): the same pick as checking every lane first.
             trials = outward_drops(points, pose, p, res.graph, winner[0], winner[1],
-                                   DIVE_REACH_M)
-            counts["outward_drops"] += len(trials)
+                                   DIVE_REACH_M, check=False)
             if not trials:
                 break
             if cost is None:
                 cost = dive_cost(points, pose, p, *winner[:3])
+            costs = [dive_cost(points, pose, p, a, b) for a, b in trials]
             best, best_cost = None, cost
-            for a, b in trials:
-                dc = dive_cost(points, pose, p, a, b)
-                if dc < best_cost:
-                    best, best_cost = (a, b), dc
+            for i in sorted(range(len(trials)), key=costs.__getitem__):  # stable: ties keep order
+                if costs[i] >= cost:
+                    break
+                counts["outward_drops"] += 1
+                a, b = trials[i]
+                if lane_is_feasible(points[a], points[b], p):
+                    best, best_cost = (a, b), costs[i]
+                    break
             if best is None:
                 break
             f = ranking_features(points[best[0]], points[best[1]])[None, :]
