@@ -406,20 +406,11 @@ class ClcModel:
                                                  dive.features), dtype=np.float64)
                 k = int(np.argmax(s))
                 contenders.append((*dive.candidates[k], float(s[k])))
-            best, best_cost = None, cost
-            for a, b, c, sc in contenders:
-                if cost is None:
-                    cost = best_cost = dive_cost(points, pose, p, *winner[:3])
-                dc = dive_cost(points, pose, p, a, b, c)
-                if dc < best_cost:
-                    # A local edit (sc None) is checked here, only when it would win: the same
-                    # pick as offering the feasible ones only (a dive's lanes are feasible).
-                    if sc is None and not lane_is_feasible(points[a], points[b], p):
-                        continue
-                    if sc is None:
-                        f = ranking_features(points[a], points[b])[None, :]
-                        sc = float(self.ranker.score(points, pose, p, [(a, b, c)], f)[0])
-                    best, best_cost = (a.copy(), b.copy(), c, sc), dc
+            if not contenders:
+                break
+            if cost is None:
+                cost = dive_cost(points, pose, p, *winner[:3])
+            best, best_cost, _ = self._cheapest(points, pose, contenders, cost)
             if best is None:
                 break
             winner, cost = best, best_cost
@@ -437,22 +428,37 @@ class ClcModel:
                 break
             if cost is None:
                 cost = dive_cost(points, pose, p, *winner[:3])
-            costs = [dive_cost(points, pose, p, a, b) for a, b in trials]
-            best, best_cost = None, cost
-            for i in sorted(range(len(trials)), key=costs.__getitem__):  # stable: ties keep order
-                if costs[i] >= cost:
-                    break
-                counts["outward_drops"] += 1
-                a, b = trials[i]
-                if lane_is_feasible(points[a], points[b], p):
-                    best, best_cost = (a, b), costs[i]
-                    break
+            best, best_cost, checked = self._cheapest(
+                points, pose, [(a, b, False, None) for a, b in trials], cost)
+            counts["outward_drops"] += checked
             if best is None:
                 break
-            f = ranking_features(points[best[0]], points[best[1]])[None, :]
-            sc = float(self.ranker.score(points, pose, p, [(best[0], best[1], False)], f)[0])
-            winner, cost = (best[0].copy(), best[1].copy(), False, sc), best_cost
+            winner, cost = best, best_cost
         return (*winner, counts, iterations, cut or bool(stopped))
+
+    def _cheapest(self, points, pose, contenders, cost):
+        """The judge's pick among ``contenders`` (left, right, closed, ranker score or None for
+        a local edit) against the winner's ``cost``: the one with the lowest ``dive_cost``
+        below it (ties: the earlier contender). A local edit must pass the shared predicates
+        (``lane_is_feasible``), checked only for the lanes below ``cost``, cheapest first (a
+        check costs more than the judge; a dive's lanes are feasible already), and is scored by
+        the ranker only if it wins. Returns (the pick or None, its cost, local edits checked)."""
+        p = self.params
+        costs = [dive_cost(points, pose, p, a, b, c) for a, b, c, _ in contenders]
+        checked = 0
+        for i in sorted(range(len(contenders)),
+                        key=lambda i: costs[i] if math.isfinite(costs[i]) else math.inf):
+            if not costs[i] < cost:
+                break
+            a, b, c, sc = contenders[i]
+            if sc is None:
+                checked += 1
+                if not lane_is_feasible(points[a], points[b], p):
+                    continue
+                f = ranking_features(points[a], points[b])[None, :]
+                sc = float(self.ranker.score(points, pose, p, [(a, b, c)], f)[0])
+            return (a.copy(), b.copy(), c, sc), costs[i], checked
+        return None, cost, checked
 
     def solve(self, points: np.ndarray, pose: Pose, colors=None, time_limit_s=None,
               confidence=None) -> Lane:
