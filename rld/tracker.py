@@ -9,7 +9,8 @@ the match score of section 2.3,
 where s_c is the longest stretch of the candidate that stays within ``tau_m`` of the tracked
 lane. A candidate scoring at least ``min_match_m`` updates the lane: every control point within
 ``tau_m`` of the candidate moves toward its nearest candidate point by an exponential moving
-average (weight ``alpha``) and gains ``confidence_gain``; the others lose ``confidence_decay``;
+average (weight ``alpha``) and gains ``confidence_gain``; the others lose ``confidence_decay``,
+except those before the candidate's start, which it does not see (kept as they are);
 the candidate's part beyond the tracked lane's far end extends it with new control points at
 ``initial_confidence``. A candidate that does not match (an outlier frame) moves nothing and
 every confidence decays. Control points whose confidence falls below ``min_confidence`` are
@@ -167,11 +168,18 @@ class LaneTracker:
             self._clean(car_xy, heading)
             return TrackedLane(self.points.copy(), self.confidence.copy(), False, score)
         self.misses = 0
-        q, d, _ = project_onto(self.points, cand)
+        q, d, arc = project_onto(self.points, cand)
         hit = d <= p.tau_m
+        # A control point before the candidate's start (its nearest candidate point is the
+        # first) is not seen by it: neither a hit nor a miss. A lane that begins at its first
+        # cone ahead of the car (CLC's, since 2026-12-04) would else wear down the points
+        # behind it, and ``confident`` (from the start) would return none.
+        unseen = ~hit & (arc <= 0.0)
         self.points[hit] = (1 - p.alpha) * self.points[hit] + p.alpha * q[hit]
-        self.confidence = np.where(hit, self.confidence + p.confidence_gain,
-                                   self.confidence - p.confidence_decay).clip(0.0, 1.0)
+        self.confidence = np.where(
+            hit, self.confidence + p.confidence_gain,
+            np.where(unseen, self.confidence, self.confidence - p.confidence_decay)
+        ).clip(0.0, 1.0)
         # Extend with the candidate's part beyond the tracked lane's far end.
         _, _, arc = project_onto(self.points[-1:], cand)
         rest = cand_after(cand, float(arc[0]))

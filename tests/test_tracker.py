@@ -48,6 +48,31 @@ def test_project_onto_hand_worked():
     np.testing.assert_allclose(s, [5, 15, 0])
 
 
+def test_points_before_the_candidate_start_are_not_worn_down():
+    """A lane tracked from x = 0 (control points every 2 m, confidence 0.3); the next
+    candidate begins at x = 9 m. The points it passes (x >= 8 m, within tau = 1 m of its
+    start) gain 0.2; those before its start, which it does not see, keep 0.3 (before
+    2026-12-04 they lost 0.1); after five such updates ``confident`` still starts at x = 0."""
+    tr = LaneTracker()
+    tr.update(straight(0.0, 30.0))
+    x = tr.points[:, 0].copy()
+    p = tr.params
+    out = tr.update(np.array([[9.0, 0.0], [30.0, 0.0]]))
+    assert out.matched
+    seen = x >= 9.0 - p.tau_m
+    np.testing.assert_allclose(out.confidence[seen], p.initial_confidence + p.confidence_gain)
+    np.testing.assert_allclose(out.confidence[~seen], p.initial_confidence)
+    assert (~seen).sum() == 4  # x = 0, 2, 4, 6
+    for _ in range(4):
+        out = tr.update(np.array([[9.0, 0.0], [30.0, 0.0]]))
+    assert out.confident(0.3).shape[0] == out.centerline.shape[0]
+    # A candidate from x = -5 m, 3 m off the lane up to x = 9 m, still wears those down.
+    tr = LaneTracker()
+    tr.update(straight(0.0, 30.0))
+    out = tr.update(np.array([[-5.0, 3.0], [9.0, 3.0], [9.0, 0.0], [30.0, 0.0]]))
+    assert out.confidence[0] == pytest.approx(p.initial_confidence - p.confidence_decay)
+
+
 def test_tracker_converges_on_a_fixed_lane():
     tr = LaneTracker()
     first = tr.update(straight(0.6))  # starts 0.6 m off the lane it will see from now on
