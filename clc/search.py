@@ -531,6 +531,33 @@ def start_replacements(points: np.ndarray, pose: Pose, params: LaneParams,
     return out
 
 
+def trim_behind(points: np.ndarray, pose: Pose, params: LaneParams, left: np.ndarray,
+                right: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """An open lane without the cones that begin a boundary behind the car
+    (``geometry.leading_behind``: up to its first cone not behind the car, keeping at least
+    two cones a side), when the lane without them still satisfies the shared predicates
+    (``lane_is_feasible``): both sides trimmed, else the left alone, else the right alone,
+    else the lane unchanged. Returns (left, right, cones trimmed). Our addition, docs/clc.md.
+
+    The search starts each boundary at a start vertex (IV-C), which may lie up to
+    ``LaneParams.start_behind_m`` behind the car, and the judge (RLD's objective, which pays a
+    benefit for every edge) prefers a lane with one more edge there, whether its cone is the
+    true one before the car or a false positive beside it. A cone behind the car tells a
+    planner nothing about the lane ahead; the protocol's true lane begins at the first cone not
+    behind the car (DESIGN.md step 5), and a false positive behind it is a lane that leaves
+    the truth at the car. The lane ahead of the car is unchanged."""
+    paths = [np.asarray(left, dtype=np.int64), np.asarray(right, dtype=np.int64)]
+    cut = [geo.leading_behind(points[p], pose.xy, pose.heading) for p in paths]
+    for take in ((True, True), (True, False), (False, True)):
+        k = [c if t else 0 for c, t in zip(cut, take, strict=True)]
+        if sum(k) == 0:
+            continue
+        trial = [p[j:] for p, j in zip(paths, k, strict=True)]
+        if lane_is_feasible(points[trial[0]], points[trial[1]], params):
+            return trial[0], trial[1], sum(k)
+    return paths[0], paths[1], 0
+
+
 def drop_ring_join(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,
                    left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     """Drop the first cone of a boundary of a *closed* lane when RLD's objective of the closed

@@ -49,6 +49,7 @@ from clc.search import (
     path_ahead,
     skip_inserts,
     start_replacements,
+    trim_behind,
 )
 from rld.constraints import lane_is_feasible, starting_vertex_pairs
 from rld.costs import (
@@ -128,6 +129,9 @@ ROUND_COUNTS = ("dives", "dive_rounds", "short_lane_rounds", "jog_dives", "pair_
                 "skip_inserts", "start_replacements", "outward_drops")
 #: Drop a closed lane's join cone when the ring is cheaper without it (``drop_ring_join``).
 RING_JOIN = True
+#: Return an open lane from each boundary's first cone not behind the car
+#: (``clc.search.trim_behind``; docs/clc.md).
+TRIM_BEHIND = True
 
 
 def dive_cost(points: np.ndarray, pose: Pose, params: LaneParams, left: np.ndarray,
@@ -543,6 +547,10 @@ class ClcModel:
         if closed and RING_JOIN:
             left, right, n = drop_ring_join(points, pose, self.params, res.graph, left, right)
             stats["dropped"] += n
+        stats["trimmed_behind"] = 0
+        if TRIM_BEHIND and not closed:
+            left, right, stats["trimmed_behind"] = trim_behind(points, pose, self.params,
+                                                               left, right)
         self._prev = (points[left].copy(), points[right].copy())
         elapsed = time.perf_counter() - t0
         if time_limit_s is not None:

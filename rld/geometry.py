@@ -289,6 +289,20 @@ def signed_area(ring: np.ndarray) -> float:
     x, y = xy[:, 0], xy[:, 1]
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
+
+def leading_behind(xy: np.ndarray, origin, heading, keep: int = 2) -> int:
+    """How many of the first points of the polyline ``xy`` (k, 2) lie behind ``origin``: their
+    offset from it has a negative component along the unit vector ``heading`` (the car's
+    heading; behind the line through the car square to it, as the evaluation protocol's true
+    lane begins at the first cone *not* behind the car, DESIGN.md step 5). Counts up to the
+    first point that is not behind, and never more than ``k - keep``."""
+    xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    along = (xy - np.asarray(origin, dtype=np.float64)) @ np.asarray(heading, dtype=np.float64)
+    limit = max(xy.shape[0] - int(keep), 0)
+    ahead = np.flatnonzero(along[:limit] >= 0.0)
+    return int(ahead[0]) if ahead.size else limit
+
+
 def polygonal_part(geom):
     """The polygonal part of a shapely geometry (drops points and lines), as one geometry."""
     if geom.is_empty:

@@ -31,6 +31,7 @@ from clc.search import (
     search_graph,
     skip_inserts,
     start_replacements,
+    trim_behind,
 )
 from rld import LaneParams, LaneSolver, LaneStatus, Pose, solve_lane
 from rld.constraints import c_seg, find_starting_vertices, lane_is_feasible
@@ -701,15 +702,16 @@ def test_two_close_calls_are_undone_in_two_rounds(dataset_dir):
     """Track 3's first hairpin at pose 12: the first search takes an unlabelled cone on each
     side near the car. With the left one kept the true right cone is too near it (2.4 m), so
     no single dive reaches the truth; the second round, from the lane with the true left side,
-    does."""
+    does. The true cone behind the car that began each boundary is trimmed (``trim_behind``),
+    so the lane is the truth from its first cone."""
     from rld.simulation import simulate_lap
     from rld.tracks import load_dataset_track
     lap = simulate_lap(load_dataset_track(dataset_dir, 3), range_m=50.0, fp_rate=0.0, seed=0)
     f = lap.frame(12)
     lane = LaneSolver("clc").solve(f.cones, f.pose)
-    assert lane.stats["dive_rounds"] >= 2
-    assert lane.left[1:10].tolist() == f.gt_left[:9].tolist()
-    assert lane.right[1:10].tolist() == f.gt_right[:9].tolist()
+    assert lane.stats["dive_rounds"] >= 2 and lane.stats["trimmed_behind"] == 2
+    assert lane.left[:10].tolist() == f.gt_left[:10].tolist()
+    assert lane.right[:10].tolist() == f.gt_right[:10].tolist()
 
 
 def test_skipped_cone_dive_mends_track3(dataset_dir):
@@ -764,6 +766,87 @@ def test_outward_drop_mends_track6(dataset_dir, monkeypatch):
     monkeypatch.setattr(clc.solver, "JOG_DIVES", jogs)
     lane = LaneSolver("clc").solve(f.cones, f.pose)
     assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
+
+def test_trim_behind_hand_worked():
+    """A straight lane along +x, 4 m wide, the car at the origin: the left boundary begins
+    with a false positive 1.5 m behind the car, the right one with a true cone 1 m behind it.
+    Both are trimmed (the right one down to its two cones ahead); a lane whose cones are all
+    ahead, or a side of two cones, is left alone."""
+    pts = np.array([[-1.5, 1.6], [2.0, 2.0], [6.0, 2.0], [10.0, 2.0],      # left 0-3
+                    [-1.0, -2.0], [3.0, -2.0], [7.0, -2.0]])               # right 4-6
+    L, R = np.array([0, 1, 2, 3]), np.array([4, 5, 6])
+    assert lane_is_feasible(pts[L], pts[R], PARAMS)
+    left, right, n = trim_behind(pts, POSE, PARAMS, L, R)
+    assert (left.tolist(), right.tolist(), n) == ([1, 2, 3], [5, 6], 2)
+    left, right, n = trim_behind(pts, POSE, PARAMS, L[1:], R[1:])
+    assert (left.tolist(), right.tolist(), n) == ([1, 2, 3], [5, 6], 0)
+    # Car at x = 2.5: cone 1 (x = 2) is behind too, but the right side keeps two cones.
+    left, right, n = trim_behind(pts, Pose(2.5, 0.0, 0.0), PARAMS, L, R)
+    assert (left.tolist(), right.tolist(), n) == ([2, 3], [5, 6], 3)
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(6, 12), yaw=st.floats(-0.4, 0.4),
+       ahead=st.floats(0.0, 4.0))
+def test_trim_behind_properties(seed, n, yaw, ahead):
+    """On random lanes (the brute-force instances' generator, the car moved ``ahead`` metres
+    along +x and turned by ``yaw``): each returned side is a suffix of the input of at least
+    two cones (or the input), every cone cut lies behind the car and begins its side, the lane
+    returned satisfies the predicates, and it is the fully trimmed lane whenever that one does;
+    else the left alone, else the right alone (brute force over the three)."""
+    pts = lane_instance(seed, n)
+    pose = Pose(ahead, 0.0, yaw)
+    start = find_starting_vertices(pts, POSE, PARAMS.near_radius_m)
+    if start is None:
+        return
+    res = enumerate_candidates(pts, POSE, PARAMS, start=start)
+    for L, R, closed in res.candidates[:20]:
+        if closed:
+            continue
+        left, right, k = trim_behind(pts, pose, PARAMS, L, R)
+        assert lane_is_feasible(pts[left], pts[right], PARAMS)
+        x = {s: pose.to_local(pts[p])[:, 0] for s, p in (("l", L), ("r", R))}
+        cut = {}
+        for s, p, q in (("l", L, left), ("r", R, right)):
+            j = p.size - q.size
+            assert q.tolist() == p[j:].tolist() and (j == 0 or q.size >= 2)
+            assert np.all(x[s][:j] < 0.0)
+            full = 0
+            while full < p.size - 2 and x[s][full] < 0.0:
+                full += 1
+            cut[s] = (j, full)
+        assert k == cut["l"][0] + cut["r"][0]
+        options = [(cut["l"][1], cut["r"][1]), (cut["l"][1], 0), (0, cut["r"][1])]
+        want = (0, 0)
+        for a, b in options:
+            if a + b and lane_is_feasible(pts[L[a:]], pts[R[b:]], PARAMS):
+                want = (a, b)
+                break
+        assert (cut["l"][0], cut["r"][0]) == want
+
+
+def test_trim_behind_mends_track4(dataset_dir, monkeypatch):
+    """Track 4 at R = 30 m, 10 % false positives, seed 8, pose 213: the left boundary begins
+    with a false positive 1.6 m behind the car and beside it, then takes the true lane; the
+    judge prefers that lane (one more edge). Returned from its first cone not behind the car,
+    the lane no longer diverges at the car (tolerant rule), and the lane ahead is the same."""
+    import clc.solver
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    lap = simulate_lap(load_dataset_track(dataset_dir, 4), range_m=30.0, fp_rate=0.1, seed=8)
+    f = lap.frame(213)
+    monkeypatch.setattr(clc.solver, "TRIM_BEHIND", False)
+    before = LaneSolver("clc").solve(f.cones, f.pose)
+    assert score_lane(f, before.left, before.right, before.ok, before.closed).critical_tolerant
+    assert f.source[before.left[0]] < 0 and f.pose.to_local(f.cones[before.left[:1]])[0, 0] < 0
+    monkeypatch.setattr(clc.solver, "TRIM_BEHIND", True)
+    lane = LaneSolver("clc").solve(f.cones, f.pose)
+    assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
+    assert lane.stats["trimmed_behind"] >= 1
+    assert lane.left.tolist() == before.left[-lane.left.size:].tolist()
+    assert lane.right.tolist() == before.right[-lane.right.size:].tolist()
+
 
 def test_shallow_start_pair_falls_back_to_a_deeper_one(dataset_dir, monkeypatch):
     """Track 3 at R = 50 m, no false positives, pose 20: the most symmetric start pair joins an
@@ -1147,17 +1230,21 @@ def test_short_lane_dives_mend_track6(dataset_dir, monkeypatch):
     assert run()[0]
 
 
-def test_start_pair_far_behind_comes_later_track2(dataset_dir):
+def test_start_pair_far_behind_comes_later_track2(dataset_dir, monkeypatch):
     """Track 2 at R = 50 m, 30 % false positives, pose 48: the most symmetric start pair is a
     true left cone 3.1 m behind the car and a false positive 3.3 m behind it (2.3 and 3.0 m
     either side), and the right boundary starts with the false positive. Pairs with a cone more
     than ``start_behind_m`` (2.5 m) behind the car go later: the lane starts at the true cones
-    beside the car (0.9 m ahead and 0.4 m behind)."""
+    beside the car (0.9 m ahead and 0.4 m behind). The start pair alone is tested here, so the
+    trim of the cones behind the car (``trim_behind``, which mends the first lane too: the
+    false positive is behind the car) is off."""
+    import clc.solver
     from rld.metrics import score_lane
     from rld.simulation import simulate_lap
     from rld.tracks import load_dataset_track
     lap = simulate_lap(load_dataset_track(dataset_dir, 2), range_m=50.0, fp_rate=0.3, seed=0)
     f = lap.frame(48)
+    monkeypatch.setattr(clc.solver, "TRIM_BEHIND", False)
     for behind, critical in ((PARAMS.near_radius_m, True), (PARAMS.start_behind_m, False)):
         lane = LaneSolver("clc", params=LaneParams(start_behind_m=behind)).solve(f.cones,
                                                                                f.pose)

@@ -1009,3 +1009,30 @@ def test_signed_area_matches_shapely_on_simple_rings(pts):
     assert abs(a) == pytest.approx(Polygon(ring).area, rel=1e-9, abs=1e-9)
     assume(abs(a) > 1e-6)
     assert (a > 0) == r.is_ccw
+
+
+def test_leading_behind_hand_worked():
+    # The car at (1, 0) heading +x: x < 1 is behind it.
+    xy = np.array([[-2.0, 2.0], [0.5, 2.0], [1.0, 2.0], [-3.0, 2.0], [6.0, 2.0]])
+    h = np.array([1.0, 0.0])
+    assert geo.leading_behind(xy, (1.0, 0.0), h) == 2  # abreast (x = 1) is not behind
+    assert geo.leading_behind(xy[2:], (1.0, 0.0), h) == 0  # a later cone behind is not leading
+    assert geo.leading_behind(xy[:2], (1.0, 0.0), h) == 0  # two cones are kept
+    assert geo.leading_behind(xy[:2], (1.0, 0.0), h, keep=1) == 1
+    assert geo.leading_behind(xy[:2], (1.0, 0.0), h, keep=0) == 2
+    # Heading -y: behind is y > 0 from the car at the origin.
+    assert geo.leading_behind(xy, (0.0, 0.0), np.array([0.0, -1.0])) == 3
+    assert geo.leading_behind(np.zeros((0, 2)), (0.0, 0.0), h) == 0
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.lists(st.tuples(st.floats(-20, 20), st.floats(-20, 20)), min_size=0, max_size=8),
+       st.floats(-math.pi, math.pi), st.integers(0, 3))
+def test_leading_behind_matches_brute_force(pts, yaw, keep):
+    xy = np.array(pts, dtype=np.float64).reshape(-1, 2)
+    h = np.array([math.cos(yaw), math.sin(yaw)])
+    k = geo.leading_behind(xy, (0.0, 0.0), h, keep=keep)
+    want = 0
+    while want < len(pts) - keep and float(xy[want] @ h) < 0.0:
+        want += 1
+    assert k == want
