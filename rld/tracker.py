@@ -10,14 +10,15 @@ where s_c is the longest stretch of the candidate that stays within ``tau_m`` of
 lane. A candidate scoring at least ``min_match_m`` updates the lane: every control point within
 ``tau_m`` of the candidate moves toward its nearest candidate point by an exponential moving
 average (weight ``alpha``) and gains ``confidence_gain``; the others lose ``confidence_decay``,
-except those before the candidate's start, which it does not see (kept as they are);
-the candidate's part beyond the tracked lane's far end extends it with new control points at
-``initial_confidence``. A candidate that does not match (an outlier frame) moves nothing and
-every confidence decays. Control points whose confidence falls below ``min_confidence`` are
-recomputed by linear interpolation between their nearest confident neighbours (section 2.3),
-or dropped at the ends. After ``max_misses`` unmatched candidates in a row the tracker starts
-over from the next candidate (the paper re-instantiates lanes from its road map, which cone
-tracks do not have).
+except those before the candidate's start (on the backward extension of its first segment,
+within ``tau_m``), which it does not see (kept as they are); the candidate's part beyond the
+tracked lane's far end (when it passes that end within ``tau_m``) extends it with new control
+points at ``initial_confidence``. A candidate that does not match (an outlier frame) moves
+nothing and every confidence decays. Control points whose confidence falls below
+``min_confidence`` are recomputed by linear interpolation between their nearest confident
+neighbours (section 2.3), or dropped at the ends. After ``max_misses`` unmatched candidates
+in a row the tracker starts over from the next candidate (the paper re-instantiates lanes
+from its road map, which cone tracks do not have).
 
 Deviations: the paper runs one tracker per lane of a road network with a map prior; here there
 is one lane, no prior, and the control points behind the car (more than ``keep_behind_m``) are
@@ -170,20 +171,28 @@ class LaneTracker:
         self.misses = 0
         q, d, arc = project_onto(self.points, cand)
         hit = d <= p.tau_m
-        # A control point before the candidate's start (its nearest candidate point is the
-        # first) is not seen by it: neither a hit nor a miss. A lane that begins at its first
-        # cone ahead of the car (CLC's, since 2026-12-04) would else wear down the points
-        # behind it, and ``confident`` (from the start) would return none.
-        unseen = ~hit & (arc <= 0.0)
+        # A control point before the candidate's start is not seen by it: neither a hit nor a
+        # miss. A lane that begins at its first cone ahead of the car (CLC's, since
+        # 2026-12-04) would else wear down the points behind it, and ``confident`` (from the
+        # start) would return none. "Before" is on the backward extension of its first
+        # segment: behind the start and within ``tau_m`` of that line. A point whose nearest
+        # candidate point is the start but that lies off to the side (a stale fold of the
+        # tracked lane, say) is a miss as before.
+        unseen = ~hit & (arc <= 0.0) & _behind_start(self.points, cand, p.tau_m)
         self.points[hit] = (1 - p.alpha) * self.points[hit] + p.alpha * q[hit]
         self.confidence = np.where(
             hit, self.confidence + p.confidence_gain,
             np.where(unseen, self.confidence, self.confidence - p.confidence_decay)
         ).clip(0.0, 1.0)
-        # Extend with the candidate's part beyond the tracked lane's far end.
-        _, _, arc = project_onto(self.points[-1:], cand)
+        # Extend with the candidate's part beyond the tracked lane's far end, when the
+        # candidate passes that end (within tau): a candidate that stops short of it, or
+        # turns away before it, has no part beyond it (before 2026-12-05 the part after
+        # the nearest point was appended even when that point was metres off, which folded
+        # the tracked lane back on itself in hairpins).
+        _, dend, arc = project_onto(self.points[-1:], cand)
         rest = cand_after(cand, float(arc[0]))
-        if rest.shape[0] >= 2 and geo.polyline_length(rest) >= p.spacing_m:
+        if dend[0] <= p.tau_m and rest.shape[0] >= 2 \
+                and geo.polyline_length(rest) >= p.spacing_m:
             new = geo.resample_polyline(rest, p.spacing_m)[1:]
             self.points = np.vstack([self.points, new])
             self.confidence = np.r_[self.confidence, np.full(new.shape[0], p.initial_confidence)]
@@ -209,6 +218,20 @@ class LaneTracker:
         for c in range(2):  # interior ones: interpolate between confident neighbours
             pts[~ok, c] = np.interp(s[~ok], s[ok], pts[ok, c])
         self.points, self.confidence = pts, conf
+
+
+def _behind_start(points: np.ndarray, cand: np.ndarray, tau_m: float) -> np.ndarray:
+    """Which ``points`` (k, 2) lie behind the polyline ``cand``'s first point, along its first
+    segment, within ``tau_m`` metres of the line through that segment."""
+    step = np.hypot(*(cand[1:] - cand[0]).T)
+    far = np.flatnonzero(step > 0.0)
+    if far.size == 0:
+        return np.zeros(points.shape[0], dtype=bool)
+    u = (cand[far[0] + 1] - cand[0]) / step[far[0]]
+    rel = points - cand[0]
+    along = rel @ u
+    across = np.abs(rel[:, 0] * u[1] - rel[:, 1] * u[0])
+    return (along <= 0.0) & (across <= tau_m)
 
 
 def cand_after(cand: np.ndarray, arc_m: float) -> np.ndarray:

@@ -170,3 +170,49 @@ def test_lane_solver_tracks_its_lanes(method):
     d = d[arc > 0]
     assert d.size >= 3 and d.max() < 1.0
     assert "tracked" not in LaneSolver(method).solve(f.cones, f.pose).stats
+
+
+def test_behind_start_hand_worked():
+    """Behind the first point along the first segment (x <= 0 for a start at the origin
+    heading +x), within tau = 1 m of that line; a repeated first point is skipped."""
+    from rld.tracker import _behind_start
+
+    pts = np.array([[-1.0, 0.0], [-3.0, 0.9], [-3.0, 1.1], [1.0, 0.0], [-2.0, -0.5],
+                    [0.0, 0.0]])
+    want = [True, True, False, False, True, True]
+    cand = np.array([[0.0, 0.0], [1.0, 0.0], [5.0, 2.0]])
+    assert _behind_start(pts, cand, 1.0).tolist() == want
+    cand = np.array([[0.0, 0.0], [0.0, 0.0], [2.0, 0.0]])
+    assert _behind_start(pts, cand, 1.0).tolist() == want
+    assert not _behind_start(pts, np.zeros((3, 2)), 1.0).any()
+
+
+def test_points_beside_the_candidate_start_still_wear_down():
+    """A tracked lane along y = 0 from x = 0 with a stale point folded 3 m aside at (8, 3)
+    (set by hand); the candidate begins at (9, 0). The stale point's nearest candidate point
+    is the start, but it is not on the start's backward line: it loses 0.1; the points at
+    x = 0..6 keep 0.3."""
+    tr = LaneTracker()
+    tr.update(straight(0.0, 30.0))
+    p = tr.params
+    tr.points = np.insert(tr.points, 4, [8.0, 3.0], axis=0)
+    tr.confidence = np.insert(tr.confidence, 4, p.initial_confidence)
+    out = tr.update(np.array([[9.0, 0.0], [30.0, 0.0]]))
+    assert out.matched
+    np.testing.assert_allclose(out.confidence[:4], p.initial_confidence)
+    assert out.confidence[4] == pytest.approx(p.initial_confidence - p.confidence_decay)
+
+
+def test_a_candidate_stopping_short_does_not_fold_the_lane():
+    """Tracked lane x = 0..30 m on y = 0. A candidate on the lane up to x = 20 that then turns
+    back to (14, -3): the last control point (30, 0) is 10 m from it, so nothing is
+    appended (before 2026-12-05 its last 6.7 m were appended after x = 30, a fold)."""
+    tr = LaneTracker()
+    tr.update(straight(0.0, 30.0))
+    out = tr.update(np.array([[0.0, 0.0], [20.0, 0.0], [14.0, -3.0]]))
+    assert out.matched
+    assert out.centerline.shape[0] == 16
+    np.testing.assert_allclose(out.centerline[:, 1], 0.0)
+    # A candidate that runs on past x = 30 still extends the lane, every 2 m.
+    out = tr.update(np.array([[0.0, 0.0], [36.0, 0.0]]))
+    np.testing.assert_allclose(out.centerline[-4:, 0], [30.0, 32.0, 34.0, 36.0])
