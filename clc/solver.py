@@ -55,6 +55,7 @@ from rld.constraints import lane_is_feasible, starting_vertex_pairs
 from rld.costs import (
     lane_cost,
     ranking_features,
+    reach_costs,
     turn_roughness,
     width_roughness,
     width_second_differences,
@@ -62,7 +63,7 @@ from rld.costs import (
 )
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
-__all__ = ["ClcModel", "MATCH_TOLERANCE_M", "dive_cost", "jog_positions"]
+__all__ = ["ClcModel", "MATCH_TOLERANCE_M", "dive_cost", "dive_costs", "jog_positions"]
 
 log = logging.getLogger(__name__)
 
@@ -144,17 +145,35 @@ def dive_cost(points: np.ndarray, pose: Pose, params: LaneParams, left: np.ndarr
     jogs the width (measured in ``LaneParams.w_width_roughness``). Since 2026-12-03 also
     ``params.w_turn_roughness`` times the turn roughness of both boundaries' same parts
     (``rld.costs.turn_roughness``, ours): a false positive inserted between two true cones
-    zigzags the boundary's turns without jogging the width much."""
-    cost = lane_cost(points, left, right, pose, params, closed=closed, radius_m=DIVE_REACH_M)
-    if params.w_width_roughness or params.w_turn_roughness:
-        a = within_radius(points, left, pose, DIVE_REACH_M)
-        b = within_radius(points, right, pose, DIVE_REACH_M)
-        if params.w_width_roughness:
-            cost += params.w_width_roughness * width_roughness(points[a], points[b])
-        if params.w_turn_roughness:
-            cost += params.w_turn_roughness * (turn_roughness(points[a])
-                                               + turn_roughness(points[b]))
+    zigzags the boundary's turns without jogging the width much. An open lane's is
+    ``rld.costs.reach_costs`` (``dive_costs`` weighs many at once)."""
+    if not closed:
+        return float(reach_costs(points, pose, params, [(left, right)], DIVE_REACH_M)[0])
+    # A closed lane's objective counts whole (``lane_cost``); its roughness, the cut sides'.
+    a = within_radius(points, left, pose, DIVE_REACH_M)
+    b = within_radius(points, right, pose, DIVE_REACH_M)
+    cost = lane_cost(points, left, right, pose, params, closed=True)
+    if params.w_width_roughness:
+        cost += params.w_width_roughness * width_roughness(points[a], points[b])
+    if params.w_turn_roughness:
+        cost += params.w_turn_roughness * (turn_roughness(points[a]) + turn_roughness(points[b]))
     return cost
+
+
+def dive_costs(points: np.ndarray, pose: Pose, params: LaneParams, lanes) -> list[float]:
+    """``dive_cost`` of every ``(left, right, closed, ...)`` of ``lanes``: the open ones in one
+    compiled call (``rld.costs.reach_costs``), the closed ones one by one."""
+    lanes = list(lanes)
+    out = [0.0] * len(lanes)
+    open_k = [k for k, lane in enumerate(lanes) if not lane[2]]
+    if open_k:
+        vals = reach_costs(points, pose, params, [lanes[k][:2] for k in open_k], DIVE_REACH_M)
+        for k, v in zip(open_k, vals.tolist(), strict=True):
+            out[k] = v
+    for k, lane in enumerate(lanes):
+        if lane[2]:
+            out[k] = dive_cost(points, pose, params, lane[0], lane[1], True)
+    return out
 
 
 def jog_positions(points: np.ndarray, pose: Pose, left: np.ndarray, right: np.ndarray,
@@ -448,7 +467,7 @@ class ClcModel:
         check costs more than the judge; a dive's lanes are feasible already), and is scored by
         the ranker only if it wins. Returns (the pick or None, its cost, local edits checked)."""
         p = self.params
-        costs = [dive_cost(points, pose, p, a, b, c) for a, b, c, _ in contenders]
+        costs = dive_costs(points, pose, p, contenders)
         checked = 0
         for i in sorted(range(len(contenders)),
                         key=lambda i: costs[i] if math.isfinite(costs[i]) else math.inf):

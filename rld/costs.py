@@ -28,6 +28,7 @@ __all__ = [
     "edge_objective",
     "lane_cost",
     "within_radius",
+    "reach_costs",
     "open_path_costs",
     "color_cost",
     "confidence_cost",
@@ -267,6 +268,40 @@ def within_radius(points: np.ndarray, idx: np.ndarray, pose: Pose,
     # near_car_mask's test (distance <= radius_m is near), in one compiled loop.
     return idx[:ck.radius_cut(np.ascontiguousarray(points, dtype=np.float64), idx,
                               float(pose.xy[0]), float(pose.xy[1]), float(radius_m))]
+
+
+def reach_costs(points: np.ndarray, pose: Pose, params: LaneParams, lanes, radius_m: float
+                ) -> np.ndarray:
+    """For each open lane ``(left, right)`` of ``lanes`` (index sequences into ``points``,
+    from the car forward): RLD's objective (eq. 29, ``lane_cost``) of the lane with each
+    boundary cut at ``radius_m`` from the car (``within_radius``), plus
+    ``params.w_width_roughness`` times the ``width_roughness`` and ``params.w_turn_roughness``
+    times the sum of the ``turn_roughness`` of the same cut boundaries (ours). (K,) floats,
+    equal to composing those functions lane by lane (tests/test_costs.py), in one compiled
+    loop: CLC's dive judge (``clc.solver.dive_costs``) weighs 5 lanes per call on average, and
+    the Python calls cost more than the arithmetic."""
+    if not (isinstance(radius_m, int | float) and math.isfinite(radius_m) and radius_m > 0):
+        raise ValueError(f"radius_m must be a positive number of metres, got {radius_m!r}")
+    lanes = list(lanes)
+    out = np.zeros(len(lanes))
+    if not lanes:
+        return out
+    sides = [[np.asarray(lane[s], dtype=np.int64).reshape(-1) for lane in lanes] for s in (0, 1)]
+    flats, ptrs = [], []
+    for paths in sides:
+        flats.append(np.ascontiguousarray(np.concatenate(paths), dtype=np.int64))
+        ptrs.append(np.concatenate([[0], np.cumsum([q.size for q in paths])]).astype(np.int64))
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    h = pose.heading
+    ck.reach_costs(pts, flats[0], ptrs[0], flats[1], ptrs[1], float(pose.xy[0]),
+                   float(pose.xy[1]), float(h[0]), float(h[1]), float(radius_m),
+                   float(params.expected_spacing_m), float(params.spacing_tolerance_m),
+                   float(params.w_spacing), float(params.w_benefit), float(params.w_heading),
+                   float(params.heading_min_distance_m), float(params.w_angle),
+                   float(params.angle_tolerance_rad), float(params.w_regularity),
+                   math.log(params.regularity_tolerance) if params.w_regularity else 1.0,
+                   float(params.w_width_roughness), float(params.w_turn_roughness), out)
+    return out
 
 
 def open_path_costs(points: np.ndarray, flat: np.ndarray, ptr: np.ndarray, pose: Pose,

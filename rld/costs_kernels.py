@@ -297,3 +297,45 @@ def width_roughness(left, right):
         for k in range(d2.shape[0]):
             total += d2[k] * d2[k]
     return total
+
+
+@njit(cache=True)
+def reach_costs(points, lflat, lptr, rflat, rptr, px, py, hx, hy, radius, expected, tolerance,
+                w_spacing, w_benefit, w_heading, min_distance, w_angle, angle_tolerance,
+                w_regularity, log_regularity, w_width_rough, w_turn_rough, out):
+    """For each open lane k (left ``lflat[lptr[k]:lptr[k + 1]]``, right likewise; indices into
+    ``points`` (N, 2), metres), both boundaries cut at ``radius`` from the car (``radius_cut``)
+    and ``out[k]`` = RLD's objective of the two cut paths (``open_path_costs``) + w_width_rough
+    times their ``width_roughness`` + w_turn_rough times the sum of their ``turn_roughness``
+    (each only when its weight is not 0), added in that order: ``rld.costs.reach_costs``."""
+    two = np.empty(2)
+    ptr = np.empty(3, dtype=np.int64)
+    for k in range(lptr.shape[0] - 1):
+        L = lflat[lptr[k]:lptr[k + 1]]
+        R = rflat[rptr[k]:rptr[k + 1]]
+        L = L[:radius_cut(points, L, px, py, radius)]
+        R = R[:radius_cut(points, R, px, py, radius)]
+        flat = np.empty(L.shape[0] + R.shape[0], dtype=np.int64)
+        flat[:L.shape[0]] = L
+        flat[L.shape[0]:] = R
+        ptr[0] = 0
+        ptr[1] = L.shape[0]
+        ptr[2] = flat.shape[0]
+        open_path_costs(points, flat, ptr, px, py, hx, hy, expected, tolerance, w_spacing,
+                        w_benefit, w_heading, min_distance, w_angle, angle_tolerance,
+                        w_regularity, log_regularity, two)
+        cost = 0.0 + (two[0] + two[1])
+        if w_width_rough != 0.0 or w_turn_rough != 0.0:
+            lxy = np.empty((L.shape[0], 2))
+            rxy = np.empty((R.shape[0], 2))
+            for i in range(L.shape[0]):
+                lxy[i, 0] = points[L[i], 0]
+                lxy[i, 1] = points[L[i], 1]
+            for i in range(R.shape[0]):
+                rxy[i, 0] = points[R[i], 0]
+                rxy[i, 1] = points[R[i], 1]
+            if w_width_rough != 0.0:
+                cost += w_width_rough * width_roughness(lxy, rxy)
+            if w_turn_rough != 0.0:
+                cost += w_turn_rough * (turn_roughness(lxy) + turn_roughness(rxy))
+        out[k] = cost

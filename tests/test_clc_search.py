@@ -914,12 +914,22 @@ def test_dive_judge_counts_within_the_reach_track4(dataset_dir, monkeypatch):
     lane = LaneSolver("clc").solve(f.cones, f.pose)
     assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
     assert set(f.gt_right.tolist()) <= set(lane.right.tolist())
-    whole = lane_cost  # the same objective without the radius
+    from rld.costs import turn_roughness, width_roughness, within_radius
 
-    def whole_lane(*args, radius_m=None, **kwargs):
-        return whole(*args, **kwargs)
+    def whole_lane(points, pose, params, lanes, radius_m):
+        """The judge of open lanes with the objective over the whole lanes (no radius), the
+        roughness terms still within it."""
+        out = []
+        for left, right in lanes:
+            a = within_radius(points, left, pose, radius_m)
+            b = within_radius(points, right, pose, radius_m)
+            out.append(lane_cost(points, left, right, pose, params)
+                       + params.w_width_roughness * width_roughness(points[a], points[b])
+                       + params.w_turn_roughness * (turn_roughness(points[a])
+                                                    + turn_roughness(points[b])))
+        return np.array(out)
 
-    monkeypatch.setattr(clc.solver, "lane_cost", whole_lane)
+    monkeypatch.setattr(clc.solver, "reach_costs", whole_lane)
     skip = LaneSolver("clc").solve(f.cones, f.pose)
     assert score_lane(f, skip.left, skip.right, skip.ok, skip.closed).critical_tolerant
     assert len(set(f.gt_right.tolist()) - set(skip.right.tolist())) == 1
@@ -1624,3 +1634,22 @@ def test_pair_drop_takes_the_true_cones_track6(dataset_dir, monkeypatch):
     20 m. The lane without the false positive costs less still; judged beside the dives
     (PAIR_DROPS) it wins. Without them it does not."""
     _mended_by(dataset_dir, monkeypatch, 6, 0.1, 6, 28, "PAIR_DROPS", "pair_drops")
+
+
+@given(seed=st.integers(0, 10_000), k=st.integers(0, 5))
+def test_dive_costs_equal_dive_cost_lane_by_lane(seed, k):
+    """The judge's batch (open lanes in one compiled call, closed ones alone) gives exactly
+    the floats of ``dive_cost`` per lane, closed lanes (costed whole) among them."""
+    from clc.solver import dive_cost, dive_costs
+
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(-20, 20, size=(30, 2))
+    pose = Pose(float(rng.uniform(-3, 3)), float(rng.uniform(-3, 3)), float(rng.uniform(-3, 3)))
+    params = LaneParams()
+    lanes = []
+    for _ in range(k):
+        perm = rng.permutation(30)
+        a, b = int(rng.integers(2, 9)), int(rng.integers(2, 9))
+        lanes.append((perm[:a], perm[a:a + b], bool(rng.integers(0, 2)), None))
+    got = dive_costs(pts, pose, params, lanes)
+    assert got == [dive_cost(pts, pose, params, a, b, c) for a, b, c, _ in lanes]

@@ -93,6 +93,28 @@ def test_lane_never_holds_a_made_up_lane():
         Lane(CONES, [0, 1], [1, 4], LaneStatus.FEASIBLE)
     with pytest.raises(ValueError, match="twice"):
         Lane(CONES, [0, 1, 0], [3, 4], LaneStatus.FEASIBLE)
+    with pytest.raises(ValueError, match="right visits a cone twice"):
+        Lane(CONES, [0, 1], [3, 4, 3], LaneStatus.FEASIBLE)
+    # Twice on one side and shared: the side's own repeat is named first.
+    with pytest.raises(ValueError, match="left visits a cone twice"):
+        Lane(CONES, [0, 1, 0], [0, 4], LaneStatus.FEASIBLE)
+
+
+def test_pose_arrays_are_read_only_and_right():
+    pose = Pose(1.0, 2.0, math.pi / 2)
+    np.testing.assert_allclose(pose.xy, [1.0, 2.0])
+    np.testing.assert_allclose(pose.heading, [0.0, 1.0], atol=1e-15)
+    with pytest.raises(ValueError):
+        pose.xy[0] = 5.0  # shared between reads: never written
+    assert pose.xy[0] == 1.0
+    assert pose == Pose(1.0, 2.0, math.pi / 2) and hash(pose) == hash(Pose(1.0, 2.0,
+                                                                            math.pi / 2))
+    import copy
+    import pickle
+
+    for other in (pickle.loads(pickle.dumps(pose)), copy.deepcopy(pose)):
+        assert other == pose and not other.xy.flags.writeable
+        np.testing.assert_allclose(other.heading, pose.heading)
 
 
 def test_status_ok():
