@@ -48,10 +48,17 @@ def _flat(*arrays: np.ndarray) -> tuple[tuple[int, ...], list[np.ndarray]]:
     for a in arrs:
         if a.shape[-1:] != (2,):
             raise ValueError(f"points must have a last axis of length 2, got shape {a.shape}")
-    b = np.broadcast_arrays(*arrs)
-    shape = b[0].shape[:-1]
-    # Broadcast views are read-only; numba kernels want plain writeable contiguous arrays.
-    return shape, [np.array(x.reshape(-1, 2), dtype=np.float64, order="C") for x in b]
+    first = arrs[0].shape
+    shape = first if all(a.shape == first for a in arrs[1:]) else \
+        np.broadcast_shapes(*(a.shape for a in arrs))
+    # Plain writeable contiguous copies for the numba kernels, broadcast by assignment
+    # (np.broadcast_arrays took 30 us a call, most of start_replacements' time).
+    out = []
+    for a in arrs:
+        x = np.empty(shape, dtype=np.float64)
+        x[...] = a
+        out.append(x.reshape(-1, 2))
+    return shape[:-1], out
 
 
 def point_segment_distance(p, a, b) -> np.ndarray:
