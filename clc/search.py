@@ -434,16 +434,16 @@ def outward_drops(points: np.ndarray, pose: Pose, params: LaneParams, graph: Sea
              np.ascontiguousarray(right, dtype=np.int64)]
     orient = np.sign(geo.signed_area(geo.lane_ring(points[paths[0]], points[paths[1]])))
     out = []
+    if orient == 0:
+        return out
+    pts = np.ascontiguousarray(points, dtype=np.float64)
     for side, p in enumerate(paths):
         head = within_radius(points, p, pose, reach_m).size
-        ks = np.arange(1, min(head, p.size - 1))
-        if ks.size == 0 or orient == 0:
-            continue
-        turn = geo.turn_angles(points[p[ks - 1]], points[p[ks]], points[p[ks + 1]])
         # The right boundary runs backwards in the ring, so its triangles turn the other way.
-        shrinks = np.sign(turn) * (1.0 if side == 0 else -1.0) == orient
-        for k in ks[shrinks]:
-            out += _drop(points, params, graph, paths, side, int(k), check)
+        ks = sk.outward_positions(pts, graph.indptr, graph.indices, p, head,
+                                  1.0 if side == 0 else -1.0, float(orient))
+        for k in ks.tolist():  # the neighbours are joined (the kernel checked the edge)
+            out += _drop(points, params, graph, paths, side, k, check)
     return out
 
 
@@ -503,27 +503,20 @@ def start_replacements(points: np.ndarray, pose: Pose, params: LaneParams,
     inside the lane beside it; this offers the judge the lane that starts at that cone."""
     if inside_m <= 0:
         return []
-    paths = [np.asarray(left, dtype=np.int64), np.asarray(right, dtype=np.int64)]
-    used = np.zeros(points.shape[0], dtype=bool)
-    used[paths[0]] = used[paths[1]] = True
+    paths = [np.ascontiguousarray(left, dtype=np.int64),
+             np.ascontiguousarray(right, dtype=np.int64)]
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    h = pose.heading
     out = []
     for side, p in enumerate(paths):
         if p.size < 2:
             continue
-        a, b = points[p[0]], points[p[1]]
-        nb = graph.neighbours(int(p[1]))
-        nb = nb[~used[nb]]
-        # On the boundary's side of the car, as find_starting_vertices takes a start cone.
-        nb = nb[(pose.to_local(points[nb])[:, 1] > 0) == (side == 0)]
-        q = points[nb]
-        t = geo.segment_parameter(q, a, b)
-        # The lane lies right of the left boundary (cross < 0), left of the right one.
-        cross = (b[0] - a[0]) * (q[:, 1] - a[1]) - (b[1] - a[1]) * (q[:, 0] - a[0])
-        inside = (cross < 0) if side == 0 else (cross > 0)
-        keep = ((t > 0.0) & (t < 1.0) & inside
-                & (geo.point_segment_distance(q, a, b) <= inside_m)
-                & (np.hypot(q[:, 0] - b[0], q[:, 1] - b[1]) > pair_m))
-        for v in nb[keep].tolist():
+        # The rule in one compiled loop over the second cone's neighbours.
+        cones = sk.start_replacement_cones(
+            pts, graph.indptr, graph.indices, p, paths[1 - side], side == 0,
+            float(pose.x), float(pose.y), float(h[0]), float(h[1]), float(inside_m),
+            float(pair_m))
+        for v in cones.tolist():
             trial = list(paths)
             trial[side] = np.concatenate([[v], p[1:]])
             if not check or lane_is_feasible(points[trial[0]], points[trial[1]], params):

@@ -1004,3 +1004,75 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
             unwind = last_ok[g]  # the frames above it are undone as exhausted ones
     return (lf[: lp[K]], lp[: K + 1], rf[: rp[K]], rp[: K + 1], feats[:K], iterations,
             complete and not gave_up)
+
+
+@njit(cache=True)
+def start_replacement_cones(pts, adj_ptr, adj_idx, path, other, left_side, px, py, hx, hy,
+                            inside_m, pair_m):
+    """The cones that may replace ``path[0]`` (``clc.search.start_replacements``, which
+    documents the rule), in the order of ``path[1]``'s sorted neighbours: unused, on the
+    boundary's side of the car (y in the car frame > 0 for the left one, as ``Pose.to_local``
+    computes it), the foot on the edge path[0] -> path[1] inside it (the unclamped
+    ``geometry.segment_parameter`` in (0, 1)), on the lane's side of it, at most ``inside_m``
+    from it and more than ``pair_m`` from path[1]."""
+    out = np.empty(0, dtype=np.int64)
+    if path.shape[0] < 2:
+        return out
+    N = pts.shape[0]
+    used = np.zeros(N, dtype=np.bool_)
+    for v in path:
+        used[v] = True
+    for v in other:
+        used[v] = True
+    a = path[0]
+    b = path[1]
+    ax, ay, bx, by = pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1]
+    abx, aby = bx - ax, by - ay
+    den = max(abx * abx + aby * aby, 1e-18)
+    keep = np.empty(adj_ptr[b + 1] - adj_ptr[b], dtype=np.int64)
+    m = 0
+    for s in range(adj_ptr[b], adj_ptr[b + 1]):
+        v = adj_idx[s]
+        if used[v]:
+            continue
+        qx, qy = pts[v, 0], pts[v, 1]
+        y = -hy * (qx - px) + hx * (qy - py)
+        if (y > 0) != left_side:
+            continue
+        t = ((qx - ax) * abx + (qy - ay) * aby) / den
+        if not (0.0 < t < 1.0):
+            continue
+        cross = abx * (qy - ay) - aby * (qx - ax)
+        if not ((cross < 0) if left_side else (cross > 0)):
+            continue
+        if point_segment_distance(qx, qy, ax, ay, bx, by) > inside_m:
+            continue
+        if math.hypot(qx - bx, qy - by) <= pair_m:
+            continue
+        keep[m] = v
+        m += 1
+    return keep[:m]
+
+
+@njit(cache=True)
+def outward_positions(pts, adj_ptr, adj_idx, path, head, sign, orient):
+    """The interior positions k (1 <= k < min(head, len(path) - 1)) of ``path`` whose cone
+    bends the boundary away from the lane (``clc.search.outward_drops``): the turn at it
+    (``turn_angle``) times ``sign`` (+1 for the left boundary, -1 for the right one) has the
+    sign ``orient`` of the lane ring's area, and a search-graph edge joins path[k - 1] and
+    path[k + 1]."""
+    hi = min(head, path.shape[0] - 1)
+    out = np.empty(max(hi - 1, 0), dtype=np.int64)
+    m = 0
+    for k in range(1, hi):
+        a, b, c = path[k - 1], path[k], path[k + 1]
+        t = turn_angle(pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1], pts[c, 0], pts[c, 1])
+        st = 1.0 if t > 0 else (-1.0 if t < 0 else 0.0)
+        if st * sign != orient:
+            continue
+        lo, up = adj_ptr[a], adj_ptr[a + 1]  # a's neighbours, sorted: is c one?
+        j = lo + np.searchsorted(adj_idx[lo:up], c)
+        if j < up and adj_idx[j] == c:
+            out[m] = k
+            m += 1
+    return out[:m]

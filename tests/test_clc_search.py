@@ -1653,3 +1653,53 @@ def test_dive_costs_equal_dive_cost_lane_by_lane(seed, k):
         lanes.append((perm[:a], perm[a:a + b], bool(rng.integers(0, 2)), None))
     got = dive_costs(pts, pose, params, lanes)
     assert got == [dive_cost(pts, pose, params, a, b, c) for a, b, c, _ in lanes]
+
+
+@given(seed=st.integers(0, 10_000), left_side=st.booleans())
+def test_start_replacement_cones_against_numpy(seed, left_side):
+    """The compiled rule of ``start_replacements`` against the same rule in numpy (the code it
+    replaced): the second cone's unused neighbours on the boundary's side of the car, foot
+    inside the first edge, on the lane's side, within 1.5 m of it and more than 1.5 m from
+    the second cone; in the neighbours' order."""
+    from rld import geometry as geo
+
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(-6, 6, size=(25, 2))
+    pose = Pose(float(rng.uniform(-1, 1)), float(rng.uniform(-1, 1)), float(rng.uniform(-3, 3)))
+    g = search_graph(pts, LaneParams())
+    perm = rng.permutation(25)
+    path, other = perm[:4].astype(np.int64), perm[4:7].astype(np.int64)
+    got = sk.start_replacement_cones(pts, g.indptr, g.indices, path, other, left_side,
+                                     pose.x, pose.y, *pose.heading, 1.5, 1.5)
+    used = np.zeros(25, bool)
+    used[path] = used[other] = True
+    nb = g.neighbours(int(path[1]))
+    nb = nb[~used[nb]]
+    nb = nb[(pose.to_local(pts[nb])[:, 1] > 0) == left_side]
+    a, b, q = pts[path[0]], pts[path[1]], pts[nb]
+    t = geo.segment_parameter(q, a, b)
+    cross = (b[0] - a[0]) * (q[:, 1] - a[1]) - (b[1] - a[1]) * (q[:, 0] - a[0])
+    keep = ((t > 0) & (t < 1) & ((cross < 0) if left_side else (cross > 0))
+            & (geo.point_segment_distance(q, a, b) <= 1.5)
+            & (np.hypot(q[:, 0] - b[0], q[:, 1] - b[1]) > 1.5))
+    assert got.tolist() == nb[keep].tolist()
+
+
+@given(seed=st.integers(0, 10_000), head=st.integers(0, 9), sign=st.sampled_from([1.0, -1.0]),
+       orient=st.sampled_from([1.0, -1.0]))
+def test_outward_positions_against_numpy(seed, head, sign, orient):
+    """The compiled pick of ``outward_drops`` against numpy: interior positions before
+    ``head`` whose turn times ``sign`` has the sign ``orient`` and whose neighbours share a
+    search-graph edge."""
+    from rld import geometry as geo
+
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(-8, 8, size=(20, 2))
+    g = search_graph(pts, LaneParams())
+    path = rng.permutation(20)[:8].astype(np.int64)
+    got = sk.outward_positions(pts, g.indptr, g.indices, path, head, sign, orient)
+    ks = np.arange(1, min(head, path.size - 1))
+    turn = geo.turn_angles(pts[path[ks - 1]], pts[path[ks]], pts[path[ks + 1]])
+    want = [int(k) for k, tu in zip(ks, turn, strict=True)
+            if np.sign(tu) * sign == orient and g.has_edge(int(path[k - 1]), int(path[k + 1]))]
+    assert got.tolist() == want
