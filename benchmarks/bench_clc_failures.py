@@ -51,7 +51,12 @@ def truth_from_start(frame: Frame, left: np.ndarray, right: np.ndarray
     as the IoU's); when the lane's first cone is one of the ``BEHIND_CONES`` true cones before
     the truth's first, an open truth is preceded by those cones and a closed one (a ring) is
     rotated to start there, so that a lane starting a true cone earlier (which the protocol
-    allows) is compared from the same cone."""
+    allows) is compared from the same cone. When the lane's first cone is the truth's second
+    (the protocol allows that too: ``rld.metrics.side_divergence``), the truth is compared from
+    there as well: an open truth without its first cone, a ring rotated by one. Until
+    2026-12-05 such a lane was compared with the whole truth, which earned the judge one more
+    edge near the car and made the pose a search miss leaving the truth at its start cone,
+    wherever it really diverged."""
     gl, gr = np.asarray(frame.gt_left, np.int64), np.asarray(frame.gt_right, np.int64)
     ring = frame.gt_closed
     if not ring:
@@ -67,6 +72,8 @@ def truth_from_start(frame: Frame, left: np.ndarray, right: np.ndarray
                 pre = seq[(int(a[0]) + np.arange(lead)) % seq.size]
                 if 0 < lead <= BEHIND_CONES and np.all(pre >= 0):
                     gt = np.roll(gt, lead) if ring else np.concatenate([pre, gt])
+            if gt.size > 1 and got[0] == gt[1]:
+                gt = np.roll(gt, -1) if ring else gt[1:]
         out.append(gt)
     return out[0], out[1]
 

@@ -56,6 +56,16 @@ def test_truth_from_start_is_the_compared_truth(frame):
     far = np.r_[frame.left_seq[i - 3: i], frame.gt_left]
     if np.all(frame.left_seq[i - 3: i] >= 0):
         assert np.array_equal(B.truth_from_start(frame, far, frame.gt_right)[0], tl)
+    # A lane starting at the truth's second cone (allowed by the protocol) is compared with
+    # the truth from there: it leaves it nowhere, and the judge sees no edge it lacks.
+    late = tl[1:]
+    ll, lr = B.truth_from_start(frame, late, frame.gt_right)
+    assert np.array_equal(ll, late) and np.array_equal(lr, tr)
+    assert B._leaves(frame, late, tr) is None
+    assert B.classify(frame, late, tr, PARAMS) == ("judge_prefers_wrong", 0.0)
+    # Starting at the third is not allowed: compared with the whole truth, left at cone 0.
+    assert np.array_equal(B.truth_from_start(frame, tl[2:], frame.gt_right)[0], tl)
+    assert B._leaves(frame, tl[2:], tr)[:2] == ("left", 0)
 
 
 
@@ -76,6 +86,10 @@ def test_truth_from_start_rotates_a_closed_truth():
     late = np.roll(f.gt_left, 3)
     assert np.array_equal(B.truth_from_start(f, late, f.gt_right)[0], f.gt_left)
     assert B._leaves(f, late, f.gt_right)[:2] == ("left", 0)
+    # One cone after the ring's first (the lane skips it): the ring is rotated to the lane.
+    after = np.roll(f.gt_left, -1)
+    assert np.array_equal(B.truth_from_start(f, after, f.gt_right)[0], after)
+    assert B._leaves(f, after, f.gt_right) is None
 
 def test_classes(frame):
     tl, tr = _truth(frame)
