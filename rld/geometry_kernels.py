@@ -551,3 +551,81 @@ def pairs_within(pts, r):
             out[m, 1] = nbr[t]
             m += 1
     return out[:m].copy()
+
+
+@njit(cache=True)
+def _pair_before(a, b):
+    """Whether start-pair key row ``a`` sorts before ``b`` (``start_pairs_ranked``)."""
+    for q in range(a.shape[0]):
+        if a[q] < b[q]:
+            return True
+        if a[q] > b[q]:
+            return False
+    return False
+
+
+@njit(cache=True)
+def start_pairs_ranked(pts, px, py, c, s, radius, k, min_width, max_behind):
+    """The ``k`` best (left, right) start pairs of ``rld.constraints.starting_vertex_pairs``
+    (CLC IV-C with our two orderings), (m, 2) int64, m <= k: the cones within ``radius`` of
+    the car at (px, py) with heading (c, s) = (cos yaw, sin yaw), left ones at local y > 0 and
+    right ones at y < 0; ordered by (narrower than ``min_width``, a cone more than
+    ``max_behind`` behind the car, the asymmetry rounded to a micrometre, the summed distance
+    from the car, the left index, the right index), each ascending: the order of the numpy
+    form's ``np.lexsort``, in one loop."""
+    n = pts.shape[0]
+    lx = np.empty(n)
+    ly = np.empty(n)
+    li = np.empty(n, dtype=np.int64)
+    rx = np.empty(n)
+    ry = np.empty(n)
+    ri = np.empty(n, dtype=np.int64)
+    nl = 0
+    nr = 0
+    for i in range(n):
+        dx = pts[i, 0] - px
+        dy = pts[i, 1] - py
+        if not math.hypot(dx, dy) <= radius:
+            continue
+        x = c * dx + s * dy
+        y = -s * dx + c * dy
+        if y > 0:
+            lx[nl] = x
+            ly[nl] = y
+            li[nl] = i
+            nl += 1
+        elif y < 0:
+            rx[nr] = x
+            ry[nr] = y
+            ri[nr] = i
+            nr += 1
+    kk = max(k, 1)
+    out = np.empty((kk, 2), dtype=np.int64)
+    if nl == 0 or nr == 0:
+        return out[:0]
+    keys = np.empty((kk, 6))
+    key = np.empty(6)
+    m = 0
+    for a in range(nl):
+        for b in range(nr):
+            dx = lx[a] - rx[b]
+            key[0] = 1.0 if math.hypot(dx, ly[a] - ry[b]) < min_width else 0.0
+            key[1] = 1.0 if (lx[a] < -max_behind or rx[b] < -max_behind) else 0.0
+            key[2] = np.rint(math.hypot(dx, ly[a] + ry[b]) * 1e6) / 1e6
+            key[3] = math.hypot(lx[a], ly[a]) + math.hypot(rx[b], ry[b])
+            key[4] = li[a]
+            key[5] = ri[b]
+            if m == kk and not _pair_before(key, keys[m - 1]):
+                continue
+            # Insert in order, dropping the last when full.
+            j = m if m < kk else kk - 1
+            while j > 0 and _pair_before(key, keys[j - 1]):
+                keys[j] = keys[j - 1]
+                out[j] = out[j - 1]
+                j -= 1
+            keys[j] = key
+            out[j, 0] = li[a]
+            out[j, 1] = ri[b]
+            if m < kk:
+                m += 1
+    return out[:m].copy()

@@ -302,6 +302,62 @@ def test_near_car_mask():
     assert C.near_car_mask(pts, CAR, 4.5).tolist() == [True, True, False, True]
 
 
+def _start_pairs_numpy(points, pose, radius_m, k=1, min_width_m=0.0, max_behind_m=math.inf):
+    """The numpy form that ``starting_vertex_pairs`` compiled (geometry_kernels
+    .start_pairs_ranked), kept as the reference: every (left, right) pair of cones within the
+    radius, sorted by np.lexsort on (narrow, behind, asymmetry to a micrometre, reach, left,
+    right)."""
+    near = np.flatnonzero(C.near_car_mask(points, pose, radius_m))
+    if near.size < 2:
+        return []
+    local = pose.to_local(points[near])
+    lefts, rights = near[local[:, 1] > 0], near[local[:, 1] < 0]
+    if lefts.size == 0 or rights.size == 0:
+        return []
+    ll, rl = local[local[:, 1] > 0], local[local[:, 1] < 0]
+    dx = ll[:, None, 0] - rl[None, :, 0]
+    asym = np.hypot(dx, ll[:, None, 1] + rl[None, :, 1])
+    narrow = np.hypot(dx, ll[:, None, 1] - rl[None, :, 1]) < float(min_width_m)
+    reach = np.hypot(ll[:, 0], ll[:, 1])[:, None] + np.hypot(rl[:, 0], rl[:, 1])[None, :]
+    behind = (ll[:, 0] < -max_behind_m)[:, None] | (rl[:, 0] < -max_behind_m)[None, :]
+    li, ri = np.meshgrid(lefts, rights, indexing="ij")
+    order = np.lexsort((ri.ravel(), li.ravel(), reach.ravel(), np.round(asym.ravel(), 6),
+                        behind.ravel(), narrow.ravel()))
+    return [(int(li.ravel()[q]), int(ri.ravel()[q])) for q in order[: max(int(k), 1)]]
+
+
+def test_starting_vertex_pairs_groups_hand_worked():
+    # Car at the origin heading +x. Left cones at (0, 2) and (1, 1); right at (0, -2.1).
+    pts = np.array([[0, 2], [1, 1], [0, -2.1], [9, 0]], float)
+    # Most symmetric: (0, 2) mirrors to (0, -2), 0.1 m from (0, -2.1); (1, 1) to (1, -1).
+    assert C.starting_vertex_pairs(pts, CAR, 4.5, 2) == [(0, 2), (1, 2)]
+    # Pairs narrower than min_width_m go last: (0, 1.5)-(0, -1.5) is the most symmetric but
+    # 3.0 m wide; (0.5, 2.5)-(0, -1.5) is 4.03 m wide.
+    narrow = np.array([[0, 1.5], [0.5, 2.5], [0, -1.5]], float)
+    assert C.starting_vertex_pairs(narrow, CAR, 4.5, 2) == [(0, 2), (1, 2)]
+    assert C.starting_vertex_pairs(narrow, CAR, 4.5, 2, min_width_m=3.5) == [(1, 2), (0, 2)]
+    # A cone more than 0.5 m behind the car puts its pairs after the others.
+    back = np.array([[-1, 2], [1, 1.5], [0, -2]], float)
+    assert C.starting_vertex_pairs(back, CAR, 4.5, 2) == [(0, 2), (1, 2)]
+    assert C.starting_vertex_pairs(back, CAR, 4.5, 2, max_behind_m=0.5) == [(1, 2), (0, 2)]
+    # No right cone within the radius: no pair.
+    assert C.starting_vertex_pairs(pts[[0, 1, 3]], CAR, 4.5, 3) == []
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.integers(0, 10_000), st.integers(2, 40), st.integers(1, 6),
+       st.sampled_from([0.0, 2.0, 3.0]), st.sampled_from([math.inf, 2.5, 0.0]))
+def test_starting_vertex_pairs_match_the_numpy_form(seed, n, k, min_width, behind):
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(-6, 6, size=(n, 2))
+    if seed % 3 == 0:  # exact mirror images: ties in the asymmetry, broken by the next keys
+        pts = np.vstack([pts, pts * [1, -1]])
+    pose = Pose(float(rng.uniform(-1, 1)), float(rng.uniform(-1, 1)),
+                float(rng.uniform(-math.pi, math.pi)))
+    want = _start_pairs_numpy(pts, pose, 4.5, k, min_width, behind)
+    assert C.starting_vertex_pairs(pts, pose, 4.5, k, min_width, behind) == want
+
+
 # --- angle triples and the turn limit ---------------------------------------------------------
 
 
