@@ -63,7 +63,8 @@ from rld.costs import (
 )
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
-__all__ = ["ClcModel", "MATCH_TOLERANCE_M", "dive_cost", "dive_costs", "jog_positions"]
+__all__ = ["ClcModel", "MATCH_TOLERANCE_M", "dive_cost", "dive_costs", "jog_positions",
+           "start_pairs"]
 
 log = logging.getLogger(__name__)
 
@@ -246,6 +247,37 @@ def _short(points: np.ndarray, pose: Pose, left: np.ndarray, right: np.ndarray,
     if not memo:
         memo.append(_map_beyond(points, pose, length_m))
     return memo[0]
+
+
+def start_pairs(points: np.ndarray, pose: Pose, params: LaneParams) -> list[tuple[int, int]]:
+    """CLC's start pairs (IV-C, ``rld.constraints.starting_vertex_pairs``), best first, at most
+    ``params.start_pairs``: those about the point ``params.start_lookback_m`` behind the car
+    along its heading, then those about the car itself (the paper's), without repeats.
+
+    Our addition (docs/clc.md, "Start cones behind the car"): about the car, the first cone of
+    a boundary is a choice made with one edge of context, and a false positive 1-3 m beside
+    the true first cone is as likely a start as the cone itself. Started behind the car, the
+    search reaches that choice along the boundary it has already passed, where the next-vertex
+    decider and the dive judge see the turn it makes; the lane is returned from its first cone
+    not behind the car (``clc.search.trim_behind``). The pairs about the car follow, for a car
+    with no cones behind it (the start of a lap); pairs narrower than ``start_min_width_m``
+    still come after every wider pair, of either kind."""
+    k = int(params.start_pairs)
+    around = starting_vertex_pairs(points, pose, params.near_radius_m, k,
+                                   params.start_min_width_m, params.start_behind_m)
+    back = float(params.start_lookback_m)
+    if back <= 0:
+        return around
+    h = pose.heading
+    behind = Pose(float(pose.x - back * h[0]), float(pose.y - back * h[1]), pose.yaw)
+    first = starting_vertex_pairs(points, behind, params.near_radius_m, k,
+                                  params.start_min_width_m, params.start_behind_m)
+    pairs = first + [q for q in around if q not in first]
+    # The pairs narrower than start_min_width_m still go after every wider one (a stable sort:
+    # the order within each group stays).
+    w = float(params.start_min_width_m)
+    pairs.sort(key=lambda q: bool(np.hypot(*(points[q[0]] - points[q[1]])) < w))
+    return pairs[:k]
 
 
 def _match(prev_xy: np.ndarray, tree: cKDTree) -> np.ndarray:
@@ -492,10 +524,7 @@ class ClcModel:
         # skipped, and lane.stats["cut_short"] says so.
         deadline = t0 + time_limit_s if time_limit_s is not None else math.inf
         stats: dict = {"ranker": self.ranker_name, "graph": self.graph, "cut_short": False}
-        pairs = starting_vertex_pairs(points, pose, self.params.near_radius_m,
-                                      int(self.params.start_pairs),
-                                      self.params.start_min_width_m,
-                                      self.params.start_behind_m)
+        pairs = start_pairs(points, pose, self.params)
         start = pairs[0] if pairs else None
         guide = None
         if self.warm_start and self._prev is not None and start is not None:

@@ -859,7 +859,8 @@ def test_shallow_start_pair_falls_back_to_a_deeper_one(dataset_dir, monkeypatch)
     from rld.tracks import load_dataset_track
     lap = simulate_lap(load_dataset_track(dataset_dir, 3), range_m=50.0, fp_rate=0.0, seed=0)
     f = lap.frame(20)
-    paper_order = LaneParams(start_min_width_m=0.0)  # the depth rule alone
+    # The depth rule alone: the paper's order, the start pairs about the car.
+    paper_order = LaneParams(start_min_width_m=0.0, start_lookback_m=0.0)
     for depth, critical in ((1, True), (clc.solver.MIN_START_DEPTH, False)):
         monkeypatch.setattr(clc.solver, "MIN_START_DEPTH", depth)
         lane = LaneSolver("clc", params=paper_order).solve(f.cones, f.pose)
@@ -1247,7 +1248,8 @@ def test_start_pair_far_behind_comes_later_track2(dataset_dir, monkeypatch):
     than ``start_behind_m`` (2.5 m) behind the car go later: the lane starts at the true cones
     beside the car (0.9 m ahead and 0.4 m behind). The start pair alone is tested here, so the
     trim of the cones behind the car (``trim_behind``, which mends the first lane too: the
-    false positive is behind the car) is off."""
+    false positive is behind the car) is off, and the pairs are sought about the car
+    (``start_lookback_m`` 0; with the default lookback the pose is not critical either)."""
     import clc.solver
     from rld.metrics import score_lane
     from rld.simulation import simulate_lap
@@ -1256,13 +1258,16 @@ def test_start_pair_far_behind_comes_later_track2(dataset_dir, monkeypatch):
     f = lap.frame(48)
     monkeypatch.setattr(clc.solver, "TRIM_BEHIND", False)
     for behind, critical in ((PARAMS.near_radius_m, True), (PARAMS.start_behind_m, False)):
-        lane = LaneSolver("clc", params=LaneParams(start_behind_m=behind)).solve(f.cones,
-                                                                               f.pose)
+        lane = LaneSolver("clc", params=LaneParams(start_behind_m=behind,
+                                                   start_lookback_m=0.0)).solve(f.cones, f.pose)
         s = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
         assert s.critical_tolerant is critical
         start = list(lane.stats["start"])
         assert bool((f.source[start] < 0).any()) is critical  # negative: a false positive
         assert bool((f.pose.to_local(f.cones[start])[:, 0] < -behind).any()) is False
+    monkeypatch.undo()
+    lane = LaneSolver("clc").solve(f.cones, f.pose)
+    assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
 
 
 @settings(max_examples=40, deadline=None)
@@ -1380,21 +1385,23 @@ def test_pair_drops_keep_the_start_and_need_a_graph_edge():
     assert [a.tolist() for a, _ in got] == [[0, 1, 14, 3, 4, 5, 6]]
 
 
-def _mended_by(dataset_dir, monkeypatch, track, fp_rate, seed, pose, flag, stat):
+def _mended_by(dataset_dir, monkeypatch, track, fp_rate, seed, pose, flag, stat,
+               params=None):
     """Solve the frame (R = 30 m) with ``clc.solver.<flag>`` as it is (on) and then off: on,
     ``lane.stats[stat]`` counts at least one lane and the lane is not critical (tolerant
-    rule); off, it counts none and the lane is critical. Returns the frame and both lanes."""
+    rule); off, it counts none and the lane is critical. Returns the frame and both lanes.
+    ``params`` (default ``LaneParams()``) for both solves."""
     import clc.solver
     from rld.metrics import score_lane
     from rld.simulation import simulate_lap
     from rld.tracks import load_dataset_track
     f = simulate_lap(load_dataset_track(dataset_dir, track), range_m=30.0, fp_rate=fp_rate,
                      seed=seed).frame(pose)
-    lane = LaneSolver("clc").solve(f.cones, f.pose)
+    lane = LaneSolver("clc", params=params).solve(f.cones, f.pose)
     assert lane.stats[stat] >= 1
     assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
     monkeypatch.setattr(clc.solver, flag, False)
-    off = LaneSolver("clc").solve(f.cones, f.pose)
+    off = LaneSolver("clc", params=params).solve(f.cones, f.pose)
     assert off.stats[stat] == 0
     assert score_lane(f, off.left, off.right, off.ok, off.closed).critical_tolerant
     return f, lane, off
@@ -1593,9 +1600,13 @@ def test_start_replacement_takes_the_true_cone_track3(dataset_dir, monkeypatch):
     the right line pairs more symmetrically with the first left cone than the true first
     right cone does (IV-C). The lane starts there, leaves the true cone 0.75 m inside its
     first edge, skips the next one and diverges at once. Offered to the judge
-    (START_REPLACE_M), the lane starting at the true cone wins; without it, it does not."""
+    (START_REPLACE_M), the lane starting at the true cone wins; without it, it does not.
+    The start pairs are sought about the car (``start_lookback_m`` 0): searched from behind
+    it (the default), the lane starts at the true cones either way."""
     f, lane, off = _mended_by(dataset_dir, monkeypatch, 3, 0.1, 0, 38, "START_REPLACE_M",
-                              "start_replacements")
+                              "start_replacements", LaneParams(start_lookback_m=0.0))
+    default = LaneSolver("clc").solve(f.cones, f.pose)
+    assert default.right[0] in set(f.gt_right.tolist())
     assert off.right[0] == 53 and lane.right[0] != 53
     assert lane.right[0] in set(f.gt_right.tolist())
 
@@ -1605,13 +1616,18 @@ def test_skip_insert_takes_the_true_cone_track4(dataset_dir, monkeypatch):
     skips the true cone 17 m ahead, which lies 0.2 m off the edge that passes it, and diverges
     before 20 m. The skipped-cone dive does not reach the lane with it (forbidding the edge's
     far cone, the search takes another option); the lane with it taken in costs 2.7 less in the
-    judge. Offered beside the dives (SKIP_INSERTS) it wins; without them it does not."""
+    judge. Offered beside the dives (SKIP_INSERTS) it wins; without them it does not. The
+    start pairs are sought about the car (``start_lookback_m`` 0): searched from behind it
+    (the default), the search takes the cone in itself."""
     f, lane, off = _mended_by(dataset_dir, monkeypatch, 4, 0.0, 0, 94, "SKIP_INSERTS",
-                              "skip_inserts")
+                              "skip_inserts", LaneParams(start_lookback_m=0.0))
+
     # The first true cone the lane without inserts misses: 15-20 m ahead, and taken in.
     skipped = next(int(c) for c in f.gt_left if c not in set(off.left.tolist()))
     assert 15.0 < np.hypot(*(f.cones[skipped] - f.pose.xy)) < 20.0
     assert skipped in lane.left.tolist()
+    default = LaneSolver("clc").solve(f.cones, f.pose)
+    assert default.stats["skip_inserts"] == 0 and skipped in default.left.tolist()
 
 
 def test_complete_enumeration_judged_track7(dataset_dir, monkeypatch):
@@ -1703,3 +1719,56 @@ def test_outward_positions_against_numpy(seed, head, sign, orient):
     want = [int(k) for k, tu in zip(ks, turn, strict=True)
             if np.sign(tu) * sign == orient and g.has_edge(int(path[k - 1]), int(path[k + 1]))]
     assert got.tolist() == want
+
+
+def test_start_pairs_look_behind_the_car_first():
+    """``clc.solver.start_pairs``: the pairs about the point ``start_lookback_m`` behind the
+    car first, then those about the car, narrow pairs after every wide one, at most
+    ``start_pairs``; 0 m is ``starting_vertex_pairs`` about the car (the paper's)."""
+    from clc.solver import start_pairs
+    from rld.constraints import starting_vertex_pairs
+    xs = np.arange(-9.0, 21.0, 3.0)
+    pts = np.vstack([np.column_stack([xs, np.full(xs.size, 2.0)]),
+                     np.column_stack([xs, np.full(xs.size, -2.0)])])
+    n = xs.size
+    at = {float(x): i for i, x in enumerate(xs)}
+    car = Pose(0.5, 0.0, 0.0)
+    about_car = starting_vertex_pairs(pts, car, 4.5, 4, 3.0, 2.5)
+    assert start_pairs(pts, car, LaneParams(start_lookback_m=0.0)) == about_car
+    got = start_pairs(pts, car, LaneParams(start_lookback_m=3.0))
+    # About (-2.5, 0): the cones at x = -3 are the most symmetric, then those at x = 0.
+    assert got[0] == (at[-3.0], n + at[-3.0])
+    assert len(got) == 4 and len(set(got)) == 4
+    assert got == (starting_vertex_pairs(pts, Pose(-2.5, 0.0, 0.0), 4.5, 4, 3.0, 2.5)
+                   + about_car)[:4]
+    # No cone within 4.5 m of the point behind the car: the pairs about the car.
+    ahead = pts[np.r_[3:n, n + 3:2 * n]]  # from x = 0 on
+    car = Pose(-2.0, 0.0, 0.0)
+    assert start_pairs(ahead, car, LaneParams()) == starting_vertex_pairs(ahead, car, 4.5, 4,
+                                                                          3.0, 2.5)
+    # Behind the car only a pair 2.2 m wide (about the point 6 m back): it comes after the
+    # four 4 m pairs about the car, though sought first.
+    narrow = np.vstack([ahead[[0, 1, n - 3, n - 2]], [[-6.0, 1.1], [-6.0, -1.1]]])
+    car = Pose(0.5, 0.0, 0.0)
+    got = start_pairs(narrow, car, LaneParams(start_pairs=8, start_lookback_m=6.0))
+    assert got == starting_vertex_pairs(narrow, car, 4.5, 8, 3.0, 2.5) + [(4, 5)]
+    assert start_pairs(narrow, car, LaneParams(start_lookback_m=6.0)) == got[:4]
+
+
+def test_start_lookback_takes_the_true_first_cone_track1(dataset_dir):
+    """Track 1 at R = 30 m, 30 % false positives, seed 4, pose 131: about the car, the start
+    pair takes a false positive 0.63 m outside the true first right cone, and the lane leaves
+    the truth at its start. Searched from 3 m behind the car (the default), the boundary
+    reaches its first cone ahead along the cones already passed and takes the true one."""
+    from rld.metrics import score_lane
+    from rld.simulation import simulate_lap
+    from rld.tracks import load_dataset_track
+    f = simulate_lap(load_dataset_track(dataset_dir, 1), range_m=30.0, fp_rate=0.3,
+                     seed=4).frame(131)
+    paper = LaneSolver("clc", params=LaneParams(start_lookback_m=0.0)).solve(f.cones, f.pose)
+    assert f.source[paper.right[0]] < 0  # a false positive
+    assert score_lane(f, paper.left, paper.right, paper.ok, paper.closed).critical_tolerant
+    lane = LaneSolver("clc").solve(f.cones, f.pose)
+    assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
+    assert f.source[lane.right[0]] >= 0 and lane.right[0] in set(f.gt_right.tolist())
+    assert lane.stats["trimmed_behind"] >= 1
