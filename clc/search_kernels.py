@@ -296,17 +296,31 @@ def skipped_positions(pts, adj_ptr, adj_idx, path, other, tol, reach):
 
 
 @njit(cache=True)
+def _used_mask(n, path, other):
+    """(n,) bool: the cones of ``path`` and of ``other`` (the two boundaries of a lane)."""
+    used = np.zeros(n, dtype=np.bool_)
+    for v in path:
+        used[v] = True
+    for v in other:
+        used[v] = True
+    return used
+
+
+@njit(cache=True)
+def _adjacent(adj_ptr, adj_idx, a, b):
+    """Whether the search graph joins ``a`` and ``b`` (``a``'s neighbours are sorted)."""
+    lo, hi = adj_ptr[a], adj_ptr[a + 1]
+    k = lo + np.searchsorted(adj_idx[lo:hi], b)
+    return k < hi and adj_idx[k] == b
+
+
+@njit(cache=True)
 def skipped_cones(pts, adj_ptr, adj_idx, path, other, tol, reach):
     """``skipped_positions`` and, at each position j, the skipped cone nearest the edge
     path[j-1] -> path[j] that is also a search-graph neighbour of path[j] (so a boundary can
     take it in between the two; ``clc.search.skip_inserts``), or -1 when none is. Returns the
     two arrays, positions and cones."""
-    N = pts.shape[0]
-    used = np.zeros(N, dtype=np.bool_)
-    for v in path:
-        used[v] = True
-    for v in other:
-        used[v] = True
+    used = _used_mask(pts.shape[0], path, other)
     out = np.empty(path.shape[0], dtype=np.int64)
     cones = np.empty(path.shape[0], dtype=np.int64)
     m = 0
@@ -328,11 +342,8 @@ def skipped_cones(pts, adj_ptr, adj_idx, path, other, tol, reach):
             if not (0.0 < t < 1.0 and d <= tol):
                 continue
             found = True
-            if d < best_d:
-                lo, hi = adj_ptr[v], adj_ptr[v + 1]  # v's neighbours, sorted: is b one?
-                k = lo + np.searchsorted(adj_idx[lo:hi], b)
-                if k < hi and adj_idx[k] == b:
-                    best, best_d = v, d
+            if d < best_d and _adjacent(adj_ptr, adj_idx, v, b):
+                best, best_d = v, d
         if found:
             out[m] = j
             cones[m] = best
@@ -1018,12 +1029,7 @@ def start_replacement_cones(pts, adj_ptr, adj_idx, path, other, left_side, px, p
     out = np.empty(0, dtype=np.int64)
     if path.shape[0] < 2:
         return out
-    N = pts.shape[0]
-    used = np.zeros(N, dtype=np.bool_)
-    for v in path:
-        used[v] = True
-    for v in other:
-        used[v] = True
+    used = _used_mask(pts.shape[0], path, other)
     a = path[0]
     b = path[1]
     ax, ay, bx, by = pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1]
@@ -1070,9 +1076,7 @@ def outward_positions(pts, adj_ptr, adj_idx, path, head, sign, orient):
         st = 1.0 if t > 0 else (-1.0 if t < 0 else 0.0)
         if st * sign != orient:
             continue
-        lo, up = adj_ptr[a], adj_ptr[a + 1]  # a's neighbours, sorted: is c one?
-        j = lo + np.searchsorted(adj_idx[lo:up], c)
-        if j < up and adj_idx[j] == c:
+        if _adjacent(adj_ptr, adj_idx, a, c):
             out[m] = k
             m += 1
     return out[:m]
