@@ -50,6 +50,7 @@ from clc.search import (
     skip_inserts,
     start_replacements,
     trim_behind,
+    unhook,
 )
 from rld.constraints import lane_is_feasible, starting_vertex_pairs
 from rld.costs import (
@@ -134,6 +135,8 @@ RING_JOIN = True
 #: Return an open lane from each boundary's first cone not behind the car
 #: (``clc.search.trim_behind``; docs/clc.md).
 TRIM_BEHIND = True
+#: Undo a boundary's hook onto the other boundary's end (``clc.search.unhook``; docs/clc.md).
+UNHOOK = True
 
 
 def dive_cost(points: np.ndarray, pose: Pose, params: LaneParams, left: np.ndarray,
@@ -599,6 +602,9 @@ class ClcModel:
         if TRIM_BEHIND and not closed:
             left, right, stats["trimmed_behind"] = trim_behind(points, pose, self.params,
                                                                left, right)
+        stats["unhooked"] = 0
+        if UNHOOK and not closed:
+            left, right, stats["unhooked"] = unhook(points, self.params, left, right)
         self._prev = (points[left].copy(), points[right].copy())
         elapsed = time.perf_counter() - t0
         if time_limit_s is not None:

@@ -44,6 +44,7 @@ __all__ = [
     "overlap_widths",
     "c_width",
     "lane_is_feasible",
+    "hook_position",
     "find_starting_vertices",
     "starting_vertex_pairs",
 ]
@@ -315,6 +316,45 @@ def lane_is_feasible(left: np.ndarray, right: np.ndarray, params, closed: bool =
                     params.max_width_m if max_width else math.inf, closed)
         and c_poly(left, right, closed)
     )
+
+
+#: ``hook_position``: the turn (rad) at least with which a boundary must reach a cone that the
+#: other boundary's end reaches more smoothly, and by how much more sharply than that end.
+#: The true lanes of the six shared tracks come to at most 0.83 and 0.56 (track 4, a bend's
+#: inner side 5 m from its outer one); CLC's clear hooks turn 1.0-1.6 rad onto a cone the other
+#: side's end reaches within 0.1-0.9 rad (2026-12-05, docs/clc.md, "Hooks undone").
+HOOK_MIN_TURN_RAD = 0.9
+HOOK_MARGIN_RAD = 0.7
+
+
+def hook_position(own: np.ndarray, other: np.ndarray, max_spacing_m: float,
+                  min_turn_rad: float = HOOK_MIN_TURN_RAD,
+                  margin_rad: float = HOOK_MARGIN_RAD) -> int:
+    """Where boundary ``own`` hooks onto the other one's end, or -1.
+
+    ``own`` and ``other`` are (k, 2) boundaries, metres, ordered from the car. A boundary hooks
+    at position j (>= 2) when its cone j continues ``other`` better than ``own``: it lies within
+    ``max_spacing_m`` of ``other``'s last cone, ``own`` turns by at least ``min_turn_rad`` to
+    reach it, and ``other``'s last edge would reach it with a turn at least ``margin_rad``
+    smaller. On a straight whose left side ends one cone later than the right, a right
+    boundary that crosses the lane to the left side's last cone hooks there (a 90 degree turn
+    against 0). Each such lane passes C_seg, C_width and C_poly (eq. 6 of CLC, the shared
+    predicates): the turn is within phi_max, the hooked cone is a lane width from the other
+    side's last-but-one cone, and the polygon stays simple, but it closes the lane's far end
+    with an edge across it. Our addition; neither paper has it (docs/clc.md, "Hooks undone").
+    Returns the first such j."""
+    own = np.asarray(own, dtype=np.float64)
+    other = np.asarray(other, dtype=np.float64)
+    if own.shape[0] < 3 or other.shape[0] < 2:
+        return -1
+    d = own[2:] - other[-1]
+    # Few cones lie within reach of the other end (one or two): their turns one by one.
+    for j in np.flatnonzero(d[:, 0] ** 2 + d[:, 1] ** 2 <= max_spacing_m ** 2) + 2:
+        t_own = abs(gk.turn_angle(*own[j - 2], *own[j - 1], *own[j]))
+        if t_own >= min_turn_rad and (abs(gk.turn_angle(*other[-2], *other[-1], *own[j]))
+                                      + margin_rad <= t_own):
+            return int(j)
+    return -1
 
 
 def starting_vertex_pairs(

@@ -32,9 +32,10 @@ from clc.search import (
     skip_inserts,
     start_replacements,
     trim_behind,
+    unhook,
 )
 from rld import LaneParams, LaneSolver, LaneStatus, Pose, solve_lane
-from rld.constraints import c_seg, find_starting_vertices, lane_is_feasible
+from rld.constraints import c_seg, find_starting_vertices, hook_position, lane_is_feasible
 from rld.costs import lane_cost, ranking_features
 
 PARAMS = LaneParams()
@@ -846,6 +847,67 @@ def test_trim_behind_mends_track4(dataset_dir, monkeypatch):
     assert lane.stats["trimmed_behind"] >= 1
     assert lane.left.tolist() == before.left[-lane.left.size:].tolist()
     assert lane.right.tolist() == before.right[-lane.right.size:].tolist()
+
+
+def test_unhook_hand_worked():
+    """A straight along +x, 4 m wide, cones every 4 m, left x = 0..20 (0-5), right x = 0..20
+    (6-11). The lane whose right side ends by crossing to the left side's last cone (5) is
+    given back with cone 5 on the left; with one more left cone (12, at x = 24) after it, both
+    move; a lane with no hook is unchanged."""
+    pts = np.array([[4.0 * i, 2.0] for i in range(6)] + [[4.0 * i, -2.0] for i in range(6)]
+                   + [[24.0, 2.0]])
+    L, R = np.arange(5), np.arange(6, 12)
+    hooked = np.append(R, 5)
+    assert lane_is_feasible(pts[L], pts[hooked], PARAMS)
+    left, right, n = unhook(pts, PARAMS, L, hooked)
+    assert (left.tolist(), right.tolist(), n) == (list(range(6)), list(range(6, 12)), 1)
+    left, right, n = unhook(pts, PARAMS, L, np.append(hooked, 12))
+    assert (left.tolist(), right.tolist(), n) == ([0, 1, 2, 3, 4, 5, 12], list(range(6, 12)), 2)
+    # Mirrored: the left side hooks onto the right side's last cone (11).
+    left, right, n = unhook(pts, PARAMS, np.append(np.arange(6), 11), np.arange(6, 11))
+    assert (left.tolist(), right.tolist(), n) == (list(range(6)), list(range(6, 12)), 1)
+    left, right, n = unhook(pts, PARAMS, np.arange(6), np.arange(6, 12))
+    assert (left.tolist(), right.tolist(), n) == (list(range(6)), list(range(6, 12)), 0)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(6, 12))
+def test_unhook_properties(seed, n):
+    """On the brute-force instances' candidates: the lane returned satisfies the predicates;
+    a side with no hook is the input, or the input with the other side's hooked tail (or its
+    first cone) appended; a hooked side is cut right where ``hook_position`` says; no cone is
+    on both sides; the count is the hooked tail's length."""
+    pts = lane_instance(seed, n)
+    start = find_starting_vertices(pts, POSE, PARAMS.near_radius_m)
+    if start is None:
+        return
+    for L, R, closed in enumerate_candidates(pts, POSE, PARAMS, start=start).candidates[:30]:
+        if closed:
+            continue
+        left, right, k = unhook(pts, PARAMS, L, R)
+        assert lane_is_feasible(pts[left], pts[right], PARAMS)
+        assert not set(left.tolist()) & set(right.tolist())
+        jl = hook_position(pts[L], pts[R], PARAMS.max_cone_spacing_m)
+        if k == 0:
+            assert left.tolist() == L.tolist() and right.tolist() == R.tolist()
+            continue
+        assert jl >= 0 or hook_position(pts[R], pts[L], PARAMS.max_cone_spacing_m) >= 0
+        own, other, new_own, new_other = (L, R, left, right) if jl >= 0 else (R, L, right, left)
+        j = own.size - k
+        assert new_own.tolist() == own[:j].tolist()
+        tail = new_other[other.size:].tolist()
+        assert new_other[:other.size].tolist() == other.tolist()
+        assert tail in (own[j:].tolist(), own[j:j + 1].tolist(), [])
+
+
+def test_clc_does_not_hook_on_a_straight():
+    """The same straight, no false positives, the car at the origin: the packaged ranker alone
+    picks the lane whose right side crosses to the left side's last cone (it is longer and as
+    regular); CLC returns the true lane, six cones a side."""
+    pts = np.array([[4.0 * i, 2.0] for i in range(6)] + [[4.0 * i, -2.0] for i in range(6)])
+    lane = solve_lane(pts, POSE, method="clc")
+    assert (lane.left.tolist(), lane.right.tolist()) == (list(range(6)), list(range(6, 12)))
+    assert lane.stats["unhooked"] == 1
 
 
 def test_shallow_start_pair_falls_back_to_a_deeper_one(dataset_dir, monkeypatch):

@@ -557,3 +557,84 @@ def test_starting_vertex_pairs_far_behind_come_later():
     assert got == [(2, 3), (2, 1), (0, 3), (0, 1)]
     got = C.starting_vertex_pairs(pts, CAR, 4.5, 4, min_width_m=4.1, max_behind_m=2.5)
     assert got == [(2, 1), (0, 3), (2, 3), (0, 1)]  # (2, 3) narrow too
+
+
+# --- hooks (hook_position) -------------------------------------------------------------------
+
+
+def _straight_with_hook():
+    """A straight along +x, 4 m wide, cones every 4 m: left x = 0..16, right x = 0..20, then
+    the right boundary crosses to (20, 2), where the left one would go next."""
+    left = np.array([[4.0 * i, 2.0] for i in range(5)])
+    right = np.array([[4.0 * i, -2.0] for i in range(6)] + [[20.0, 2.0]])
+    return left, right
+
+
+def test_hook_position_hand_worked():
+    left, right = _straight_with_hook()
+    # The right side turns by pi/2 to reach (20, 2); the left side's end reaches it straight on.
+    assert C.hook_position(right, left, 5.5) == 6
+    assert C.hook_position(left, right, 5.5) == -1
+    # Without the hook, or with the hooked cone out of the left end's reach, none.
+    assert C.hook_position(right[:-1], left, 5.5) == -1
+    assert C.hook_position(right, left, 3.9) == -1
+    # Two hooked cones: the first one is where the hook begins.
+    right2 = np.vstack([right, [[24.0, 2.0]]])
+    assert C.hook_position(right2, left, 5.5) == 6
+    # A bend: the outer (right) side sweeps round the inner side's end at 4 m. Its cones are
+    # reached from the inner end with a large turn, so they are not a hook.
+    a = np.linspace(0.0, math.pi / 2, 5)
+    inner = np.column_stack([10 * np.sin(a[:3]), 12 - 10 * np.cos(a[:3])])
+    outer = np.column_stack([14 * np.sin(a), 12 - 14 * np.cos(a)])
+    assert C.hook_position(outer, inner, 5.5) == -1
+    # The thresholds: a turn of 0.85 rad onto a cone straight ahead of the other end is
+    # below HOOK_MIN_TURN_RAD (0.9); 1.0 rad is a hook.
+    for turn, want in ((0.85, -1), (1.0, 3)):
+        own = np.array([[0.0, -2.0], [4.0, -2.0], [8.0, -2.0]])
+        c = own[-1] + 4.0 * np.array([math.cos(turn), math.sin(turn)])
+        other = np.array([c - [8.0, 0.0], c - [4.0, 0.0]])
+        assert C.hook_position(np.vstack([own, c]), other, 5.5) == want
+
+
+def _hook_reference(own, other, d_max):
+    """``hook_position`` as a plain loop over the cones."""
+    for j in range(2, len(own)):
+        c = own[j]
+        if math.dist(c, other[-1]) > d_max:
+            continue
+        t_own = abs(float(geo.turn_angles(own[j - 2], own[j - 1], c)))
+        t_other = abs(float(geo.turn_angles(other[-2], other[-1], c)))
+        if t_own >= C.HOOK_MIN_TURN_RAD and t_other + C.HOOK_MARGIN_RAD <= t_own:
+            return j
+    return -1
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.integers(0, 8), st.integers(0, 8))
+def test_hook_position_matches_a_loop(seed, n_own, n_other):
+    """Random boundaries in a 12 m square: the vectorized rule equals the loop."""
+    rng = np.random.default_rng(seed)
+    own, other = rng.uniform(0, 12, (n_own, 2)), rng.uniform(0, 12, (n_other, 2))
+    want = _hook_reference(own, other, 5.5) if n_own >= 3 and n_other >= 2 else -1
+    assert C.hook_position(own, other, 5.5) == want
+
+
+def _true_lanes_never_hook(lap, every):
+    p = LaneParams()
+    for k in range(0, len(lap), every):
+        f = lap.frame(k)
+        for a, b in ((f.gt_left, f.gt_right), (f.gt_right, f.gt_left)):
+            assert C.hook_position(f.cones[a], f.cones[b], p.max_cone_spacing_m) == -1, k
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_true_lanes_of_generated_tracks_never_hook(seed):
+    _true_lanes_never_hook(simulate_lap(generate_track(seed), range_m=30.0), every=2)
+
+
+@pytest.mark.parametrize("track", [1, 2, 3, 4, 6, 7])
+def test_true_lanes_of_the_shared_tracks_never_hook(dataset_dir, track):
+    """Every 2nd pose at R = 30 m (the truth ends sooner there, so more ends to hook onto)."""
+    from rld.tracks import load_dataset_track
+    _true_lanes_never_hook(simulate_lap(load_dataset_track(dataset_dir, track), range_m=30.0),
+                           every=2)
