@@ -229,7 +229,10 @@ def train_ranker(n_generated: int, train_tracks: str, fp_rates: str, ranges: str
 @click.option("--tracks", "track_ids", default=None,
               help="Dataset track numbers (default: all the dataset has).")
 @click.option("--generated", "n_generated", default=0, show_default=True,
-              help="Also this many generated tracks (seeds 0, 1, ...).")
+              help="Also this many generated tracks (seeds 0, 1, ...; see --generated-seed).")
+@click.option("--generated-seed", "first_generated", default=0, show_default=True,
+              help="Seed of the first generated track (the ranker trains on 1000-1007, "
+                   "`rld bench rld-paper` uses 11-15).")
 @click.option("--ranges", default="30,50", show_default=True, help="Perception ranges, metres.")
 @click.option("--fp-rates", default="0,0.1,0.3,0.5", show_default=True)
 @click.option("--every", default=1, show_default=True, help="Every k-th pose of each lap.")
@@ -242,8 +245,9 @@ def train_ranker(n_generated: int, train_tracks: str, fp_rates: str, ranges: str
 @click.option("--results", "results_page", default=None,
               help="Also write the results page (docs/results.md) here.")
 def eval_cmd(dataset: str | None, methods: str, track_ids: str | None, n_generated: int,
-             ranges: str, fp_rates: str, every: int, seed: str, processes: int | None, out: str,
-             plot_failures: bool, results_page: str | None) -> None:
+             first_generated: int, ranges: str, fp_rates: str, every: int, seed: str,
+             processes: int | None, out: str, plot_failures: bool,
+             results_page: str | None) -> None:
     """Run the evaluation protocol (DESIGN.md) and write records, tables and plots."""
     import datetime
     import shlex
@@ -265,7 +269,7 @@ def eval_cmd(dataset: str | None, methods: str, track_ids: str | None, n_generat
             tracks += [load_dataset_track(folder, k) for k in ids]
         except FileNotFoundError as exc:
             raise click.ClickException(str(exc)) from exc
-    tracks += [generate_track(s) for s in range(n_generated)]
+    tracks += [generate_track(first_generated + s) for s in range(n_generated)]
     if not tracks:
         raise click.ClickException("no tracks: give a dataset folder (or put the dataset in "
                                    "../shared/data/...) or --generated N")

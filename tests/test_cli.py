@@ -85,3 +85,12 @@ def test_eval_refuses_a_stride_that_restarts_the_incremental_solver():
     result = CliRunner().invoke(main, ["eval", "--generated", "1", "--methods",
                                        "rld-incremental", "--every", "5"])
     assert result.exit_code != 0 and "pose by pose" in result.output
+
+
+def test_eval_generated_tracks_start_at_the_seed_given(tmp_path):
+    result = CliRunner().invoke(main, ["eval", "--generated", "1", "--generated-seed", "105",
+                                       "--methods", "nearest", "--ranges", "30", "--fp-rates",
+                                       "0", "--every", "40", "--processes", "1",
+                                       "--out", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert "Tracks: generated seed 105." in result.output
