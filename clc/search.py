@@ -566,9 +566,11 @@ def unhook(points: np.ndarray, params: LaneParams, left: np.ndarray,
     The ranker scores a lane by its length and its cones' regularity (section VII); a boundary
     that takes the other side's last cone, one lane width across, is longer and no less regular,
     and the hooked lane passes every constraint of the search (eq. 6). On the six shared tracks
-    (seed 0, every 3rd pose) 10-13 % of CLC's lanes ended in such a hook at 0 and 30 % false
+    (seed 0, every 4th pose) 10-13 % of CLC's lanes ended in such a hook at 0 and 30 % false
     positives, RLD's in 0-1.5 % (its angle and heading costs, eqs 20 and 25, charge the edge
-    across)."""
+    across). The edge from the other boundary's end to the hooked cone is within
+    ``max_cone_spacing_m``, an edge of the radius graph (IV-A); with the Delaunay graph it may
+    not be one."""
     paths = [np.asarray(left, dtype=np.int64), np.asarray(right, dtype=np.int64)]
     for a in (0, 1):
         own, other = paths[a], paths[1 - a]

@@ -336,12 +336,12 @@ def hook_position(own: np.ndarray, other: np.ndarray, max_spacing_m: float,
     at position j (>= 2) when its cone j continues ``other`` better than ``own``: it lies within
     ``max_spacing_m`` of ``other``'s last cone, ``own`` turns by at least ``min_turn_rad`` to
     reach it, and ``other``'s last edge would reach it with a turn at least ``margin_rad``
-    smaller. On a straight whose left side ends one cone later than the right, a right
-    boundary that crosses the lane to the left side's last cone hooks there (a 90 degree turn
-    against 0). Each such lane passes C_seg, C_width and C_poly (eq. 6 of CLC, the shared
-    predicates): the turn is within phi_max, the hooked cone is a lane width from the other
-    side's last-but-one cone, and the polygon stays simple, but it closes the lane's far end
-    with an edge across it. Our addition; neither paper has it (docs/clc.md, "Hooks undone").
+    smaller. On a straight, a right boundary that ends by crossing the lane to the cone that
+    comes next on the left side hooks there (a 90 degree turn against 0). Such a lane passes
+    C_seg, C_width and C_poly (eq. 6 of CLC, the shared predicates): the turn is within
+    phi_max, the hooked cone is one cone spacing from the other boundary's last cone (within
+    the width limits), and the polygon stays simple, but it closes the lane's far end with an
+    edge across it. Our addition; neither paper has it (docs/clc.md, "Hooks undone").
     Returns the first such j."""
     own = np.asarray(own, dtype=np.float64)
     other = np.asarray(other, dtype=np.float64)
