@@ -8,6 +8,10 @@ the chosen edges are exactly two simple paths. When those paths fail the shared 
 without C_width's upper bound, since the window can cut one boundary short), that lane is cut
 off (``rld.program.lane_cut``) and the program solved again, up to
 ``MAX_LANE_CUT_ROUNDS`` times within the budget; a lane still rejected is returned as no lane.
+When the program has no solution, or only lanes the predicate rejects, and it has a heading row
+(eq. 9), it is solved once more without that row (``HEADING_FALLBACK``; in a tight bend the
+boundaries beside the car turn more than the row's tolerance from the car's heading;
+docs/formulation.md).
 Returns a ``Lane`` in the caller's indices.
 
 Warm start: the previous lane's boundaries are kept as positions; on the next call every
@@ -37,6 +41,8 @@ DEFAULT_TIME_LIMIT_S = 0.4  # the paper's success limit (section IV-A)
 MAX_CYCLE_ROUNDS = 25
 #: Re-solves after the program's optimum failed the shared lane predicate (``lane_cut``).
 MAX_LANE_CUT_ROUNDS = 3
+#: Solve again without the heading row (eq. 9) when the program is infeasible.
+HEADING_FALLBACK = True
 
 
 def _split(program, x) -> tuple[list[list[int]], list[list[int]]]:
@@ -216,34 +222,63 @@ class RldModel:
                 verdicts[key] = lane_is_feasible(sub[lt], sub[rt], self.params, max_width=False)
             return verdicts[key]
 
-        while True:
+        def solve_loop(result):
+            cuts = 0  # this loop's lane cuts (stats["lane_cut_rounds"] counts every loop's)
             while True:
-                remaining = budget - (time.perf_counter() - t_solve)
-                if remaining <= 0 and result is not None:
-                    break
-                result = self.backend.solve(program, max(remaining, 1e-3), hint)
-                if result.x is None:
+                while True:
+                    remaining = budget - (time.perf_counter() - t_solve)
+                    if remaining <= 0 and result is not None:
+                        break
+                    result = self.backend.solve(program, max(remaining, 1e-3), hint)
+                    if result.x is None:
+                        break
+                    paths, cycles = _split(program, result.x)
+                    if not cycles:
+                        break
+                    stats["cycle_rounds"] += 1
+                    if stats["cycle_rounds"] > MAX_CYCLE_ROUNDS:
+                        break
+                    for comp in cycles:
+                        cycle_cut(program, comp)
+                if not check or result.x is None:
                     break
                 paths, cycles = _split(program, result.x)
-                if not cycles:
+                if cycles or len(paths) != 2:
                     break
-                stats["cycle_rounds"] += 1
-                if stats["cycle_rounds"] > MAX_CYCLE_ROUNDS:
+                pl, pr = self._orient(program, paths, sub, pose)
+                if (feasible(pl, pr)
+                        or cuts >= MAX_LANE_CUT_ROUNDS
+                        or budget - (time.perf_counter() - t_solve) <= 0):
                     break
-                for comp in cycles:
-                    cycle_cut(program, comp)
-            if not check or result.x is None:
-                break
+                cuts += 1
+                stats["lane_cut_rounds"] += 1
+                lane_cut(program, pl, pr)
+            return result
+
+        def no_lane(result) -> bool:
+            """The program is infeasible, or its best lane is one the shared predicate
+            rejects (the lane cuts ran out)."""
+            if result.x is None:
+                return result.status == "infeasible"
+            if not check:
+                return False
             paths, cycles = _split(program, result.x)
             if cycles or len(paths) != 2:
-                break
-            pl, pr = self._orient(program, paths, sub, pose)
-            if (feasible(pl, pr)
-                    or stats["lane_cut_rounds"] >= MAX_LANE_CUT_ROUNDS
-                    or budget - (time.perf_counter() - t_solve) <= 0):
-                break
-            stats["lane_cut_rounds"] += 1
-            lane_cut(program, pl, pr)
+                return False
+            return not feasible(*self._orient(program, paths, sub, pose))
+
+        result = solve_loop(None)
+        heading_rows = program.family == "heading"
+        if (HEADING_FALLBACK and heading_rows.any() and no_lane(result)
+                and budget - (time.perf_counter() - t_solve) > 0):
+            # Eq. 9 in a bend: the boundaries beside the car can turn more than
+            # heading_tolerance_rad from the car's heading, and the row then leaves no lane at
+            # all (or only lanes through rungs across the track, which the shared predicate
+            # rejects). Solved again without it (the heading cost, eq. 25, still counts); the
+            # lane cuts made so far stay.
+            program.row_lo[heading_rows] = -np.inf
+            stats["heading_relaxed"] = True
+            result = solve_loop(None)
         stats["solve_time_s"] = time.perf_counter() - t_solve
         if getattr(self.backend, "last_name", ""):
             stats["backend"] = f"{self.backend.name}:{self.backend.last_name}"
@@ -266,6 +301,9 @@ class RldModel:
             status, message = LaneStatus.FEASIBLE, "cycle dropped when the time budget ran out"
         if result.status == "feasible":
             message = message or f"time limit reached; gap {result.gap:.4g}"
+        if stats.get("heading_relaxed"):
+            message = "; ".join(m for m in (message, "no lane met the heading row (eq. 9); "
+                                            "solved without it") if m)
         stats["gap"] = result.gap
         if len(paths) != 2:
             return Lane.not_found(points, f"solution has {len(paths)} paths", stats=stats)

@@ -520,3 +520,40 @@ def test_cpsat_text_model_against_brute_force(seed):
     else:
         assert res.status == "optimal"
         assert res.objective == pytest.approx(best, abs=1e-6)
+
+
+def _bend_beside_the_car():
+    """A straight lane of six cones a side, 4 m apart and 4 m wide, seen by a car at its start
+    whose heading is 50 degrees off the lane: every edge within heading_radius_m of the car is
+    more than heading_tolerance_rad (45 degrees) off the heading, but for the rungs between the
+    boundaries. So are the boundaries beside the car in a tight bend (shared track 4, pose 208:
+    46 and 68 degrees)."""
+    xs = np.arange(6) * 4.0
+    points = np.vstack([np.column_stack([xs, np.full(6, 2.0)]),
+                        np.column_stack([xs, np.full(6, -2.0)])])
+    return points, Pose(0.5, 0.0, math.radians(50))
+
+
+def test_heading_row_is_dropped_when_no_lane_meets_it(monkeypatch):
+    import rld.solver as rs
+
+    points, pose = _bend_beside_the_car()
+    lane_edges = np.array([(i, i + 1) for i in range(5)] + [(i, i + 1) for i in range(6, 11)])
+    assert not C.heading_mask(points, lane_edges, pose, PARAMS.heading_radius_m,
+                              PARAMS.heading_tolerance_rad).any()
+    monkeypatch.setattr(rs, "HEADING_FALLBACK", False)
+    # With the row, the program's lanes cross the track on the rungs; the shared predicate
+    # rejects each of them and no lane is returned.
+    assert not solve_lane(points, pose, method="rld").ok
+    monkeypatch.setattr(rs, "HEADING_FALLBACK", True)
+    lane = solve_lane(points, pose, method="rld")
+    assert lane.ok and lane.stats["heading_relaxed"]
+    assert "heading row" in lane.message
+    assert lane.left.tolist() == list(range(6)) and lane.right.tolist() == list(range(6, 12))
+
+
+def test_heading_row_is_kept_when_a_lane_meets_it():
+    points, _ = _bend_beside_the_car()
+    lane = solve_lane(points, Pose(0.5, 0.0, 0.0), method="rld")
+    assert lane.ok and "heading_relaxed" not in lane.stats
+    assert lane.left.tolist() == list(range(6)) and lane.right.tolist() == list(range(6, 12))
