@@ -123,6 +123,22 @@ def solve(map_path: str, pose_text: str, method: str, plot_path: str | None) -> 
         sys.exit(1)
 
 
+_PARAM_HELP = ("Override a LaneParams field, NAME=VALUE (repeatable), e.g. --param "
+               "max_cone_spacing_m=6.0; the run's command line records it.")
+
+
+def _params(items: tuple[str, ...]):
+    """LaneParams from --param NAME=VALUE items (None when there are none)."""
+    if not items:
+        return None
+    from rld.types import LaneParams
+
+    try:
+        return LaneParams.from_overrides(items)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="--param") from exc
+
+
 def _emit(text: str, out: str | None) -> None:
     """Print a benchmark's Markdown and, with ``--out``, also write it to that file."""
     click.echo(text)
@@ -244,10 +260,11 @@ def train_ranker(n_generated: int, train_tracks: str, fp_rates: str, ranges: str
 @click.option("--plot-failures", is_flag=True, help="Draw every critical failure.")
 @click.option("--results", "results_page", default=None,
               help="Also write the results page (docs/results.md) here.")
+@click.option("--param", "param_items", multiple=True, metavar="NAME=VALUE", help=_PARAM_HELP)
 def eval_cmd(dataset: str | None, methods: str, track_ids: str | None, n_generated: int,
              first_generated: int, ranges: str, fp_rates: str, every: int, seed: str,
              processes: int | None, out: str, plot_failures: bool,
-             results_page: str | None) -> None:
+             results_page: str | None, param_items: tuple[str, ...]) -> None:
     """Run the evaluation protocol (DESIGN.md) and write records, tables and plots."""
     import datetime
     import shlex
@@ -257,6 +274,7 @@ def eval_cmd(dataset: str | None, methods: str, track_ids: str | None, n_generat
     from rld.generator import generate_track
     from rld.tracks import DATASET_TRACKS, find_dataset_dir, load_dataset_track
 
+    params = _params(param_items)
     try:
         specs = [report.parse_method(m) for m in methods.split(",") if m.strip()]
     except ValueError as exc:
@@ -282,7 +300,7 @@ def eval_cmd(dataset: str | None, methods: str, track_ids: str | None, n_generat
         records = report.evaluate(
             tracks, specs, ranges=[float(v) for v in ranges.split(",")],
             fp_rates=[float(v) for v in fp_rates.split(",")], every=every, seed=seeds,
-            processes=processes,
+            processes=processes, params=params,
             plot_failures=str(Path(out) / "failures") if plot_failures else None)
     except ValueError as exc:
         raise click.BadParameter(str(exc)) from exc
@@ -363,13 +381,20 @@ def bench_budget(backends: str, sizes: str, budgets: str, n_tracks: int, stride:
 @click.option("--seeds", default="0,1,2,3,4", show_default=True,
               help="Comma-separated seeds (tracks, noise, false positives), pooled.")
 @click.option("--out", default=None, help="Also write the Markdown table to this file.")
+@click.option("--param", "param_items", multiple=True, metavar="NAME=VALUE", help=_PARAM_HELP)
 def bench_rld_paper(method: str, backend: str, n_cones: int, poses: int, seeds: str,
-                    out: str | None) -> None:
+                    out: str | None, param_items: tuple[str, ...]) -> None:
     """RLD accuracy in the paper's experiment (fig. 7): topologies x false-positive ratios."""
+    params = _params(param_items)  # checked here; the benchmark gets the names given
+    names = {t.split("=", 1)[0].strip() for t in param_items}
+    if "max_cones" in names:
+        raise click.BadParameter("the window size is --cones", param_hint="--param")
+    overrides = {k: getattr(params, k) for k in names}
     mod = _benchmark_module("bench_rld_paper")
     table = mod.to_markdown(mod.run(backend=backend, n_cones=n_cones, poses=poses,
                                     method=method,
-                                    seeds=[int(v) for v in seeds.split(",") if v.strip()]))
+                                    seeds=[int(v) for v in seeds.split(",") if v.strip()],
+                                    **overrides))
     _emit(table, out)
 
 

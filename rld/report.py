@@ -28,6 +28,7 @@ import numpy as np
 from rld.evaluation import PoseRecord, lap_interval, run_protocol, summarize
 from rld.metrics import CATEGORIES
 from rld.tracks import Track
+from rld.types import LaneParams
 
 __all__ = ["MethodSpec", "parse_method", "evaluate", "summaries", "table_markdown",
            "stability_markdown", "seeds_markdown",
@@ -76,20 +77,22 @@ def parse_method(text: str) -> MethodSpec:
 
 
 def _job(spec: MethodSpec, track: Track, range_m: float, fp_rate: float, every: int, seed: int,
-         plot_failures: str | None) -> list[dict]:
+         plot_failures: str | None, params: LaneParams | None = None) -> list[dict]:
     recs = run_protocol([track], method=spec.method, range_m=range_m, fp_rate=fp_rate,
                         every=every, seed=seed, stateful=True, label=spec.label,
-                        plot_failures=plot_failures, **spec.kwargs())
+                        plot_failures=plot_failures, params=params, **spec.kwargs())
     return [r.to_dict() for r in recs]
 
 
 def evaluate(tracks: Sequence[Track], specs: Sequence[MethodSpec], ranges=(30.0, 50.0),
              fp_rates=(0.0, 0.1, 0.3, 0.5), every: int = 1, seed: int | Sequence[int] = 0,
              processes: int | None = None, progress: bool = True,
-             plot_failures: str | None = None) -> list[PoseRecord]:
+             plot_failures: str | None = None,
+             params: LaneParams | None = None) -> list[PoseRecord]:
     """Every (spec, track, range, rate, seed) of the protocol; ``seed``: the false positives'
     seed, or several (each a lap of its own; ``summaries`` pools them and keeps each seed's
-    critical rates). ``processes`` workers (default: the CPU count). Records come back in a
+    critical rates). ``processes`` workers (default: the CPU count). ``params``: every
+    method's ``LaneParams`` (default: the defaults). Records come back in a
     fixed order whatever the scheduling. A method that
     keeps its lane from call to call (``rld-incremental``) says how small ``every`` must be
     (its ``max_every``: 5, poses lie 1 m apart and a larger stride is a pose jump, which
@@ -114,11 +117,11 @@ def evaluate(tracks: Sequence[Track], specs: Sequence[MethodSpec], ranges=(30.0,
     bar = tqdm(total=len(jobs), desc="rld eval", unit="lap", disable=not progress)
     if n <= 1:
         for i, (s, t, r, fp, sd) in enumerate(jobs):
-            out[i] = _job(s, t, r, fp, every, sd, plot_failures)
+            out[i] = _job(s, t, r, fp, every, sd, plot_failures, params)
             bar.update(1)
     else:
         with ProcessPoolExecutor(max_workers=n) as pool:
-            futures = {pool.submit(_job, s, t, r, fp, every, sd, plot_failures): i
+            futures = {pool.submit(_job, s, t, r, fp, every, sd, plot_failures, params): i
                        for i, (s, t, r, fp, sd) in enumerate(jobs)}
             for fut in as_completed(futures):
                 out[futures[fut]] = fut.result()

@@ -10,7 +10,7 @@ from __future__ import annotations
 import enum
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
@@ -356,6 +356,31 @@ class LaneParams:
             raise ValueError("LaneParams.max_cones must be at least 4")
         if self.regularity_tolerance <= 1.0:
             raise ValueError("LaneParams.regularity_tolerance must be above 1 (a length ratio)")
+
+    @classmethod
+    def from_overrides(cls, items) -> LaneParams:
+        """The defaults with ``items`` applied: ``"name=value"`` strings (as the CLI's
+        ``--param`` takes them) or a mapping of names to values. Each value takes its field's
+        type (an int field wants an integer). ValueError naming the field for an unknown name,
+        a value that does not parse or one the checks of ``__post_init__`` refuse."""
+        base = cls()
+        pairs = items.items() if hasattr(items, "items") else [
+            tuple(str(t).split("=", 1)) if "=" in str(t) else (str(t), None) for t in items]
+        kw = {}
+        for name, value in pairs:
+            name = str(name).strip()
+            if not hasattr(base, name) or name.startswith("_"):
+                raise ValueError(f"LaneParams has no field {name!r}; fields: "
+                                 + ", ".join(f.name for f in fields(cls)))
+            if value is None:
+                raise ValueError(f"give a value: {name}=VALUE")
+            kind = type(getattr(base, name))
+            try:
+                kw[name] = kind(value) if kind is float else int(str(value).strip())
+            except ValueError as exc:
+                what = "a number" if kind is float else "an integer"
+                raise ValueError(f"LaneParams.{name} takes {what}, got {value!r}") from exc
+        return replace(base, **kw)
 
     @property
     def max_angle_cost(self) -> float:

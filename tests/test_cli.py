@@ -1,4 +1,7 @@
+import json
+
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 from rld.cli import main
@@ -94,3 +97,36 @@ def test_eval_generated_tracks_start_at_the_seed_given(tmp_path):
                                        "--out", str(tmp_path)])
     assert result.exit_code == 0, result.output
     assert "Tracks: generated seed 105." in result.output
+
+
+def test_eval_param_overrides_reach_the_solver(tmp_path):
+    args = ["eval", "--generated", "1", "--methods", "nearest", "--ranges", "30",
+            "--fp-rates", "0", "--every", "40", "--processes", "1"]
+    plain = CliRunner().invoke(main, args + ["--out", str(tmp_path / "a")])
+    # No cone lies within 0.1 m of the car: the baseline finds no start and fails everywhere.
+    none = CliRunner().invoke(main, args + ["--out", str(tmp_path / "b"),
+                                            "--param", "near_radius_m=0.1"])
+    assert plain.exit_code == 0 and none.exit_code == 0, plain.output + none.output
+    records = [json.loads(line) for line in (tmp_path / "b" / "poses.jsonl").open()]
+    assert records and all(r["category"] == "failed" for r in records)
+    records = [json.loads(line) for line in (tmp_path / "a" / "poses.jsonl").open()]
+    assert any(r["category"] != "failed" for r in records)
+
+
+def test_bench_rld_paper_param_overrides():
+    result = CliRunner().invoke(main, ["bench", "rld-paper", "--poses", "2", "--seeds", "0",
+                                       "--param", "near_radius_m=0.1"])
+    assert result.exit_code == 0, result.output
+    assert "| all | 1:5 | 6 | 100.0 | 100.0 |" in result.output
+
+
+@pytest.mark.parametrize("item, message", [
+    ("no_such_field=1", "no field 'no_such_field'"),
+    ("max_iterations=2.5", "takes an integer"),
+    ("w_benefit", "give a value"),
+    ("max_cones=30", "the window size is --cones"),
+])
+def test_bench_rld_paper_refuses_bad_params(item, message):
+    result = CliRunner().invoke(main, ["bench", "rld-paper", "--poses", "1", "--seeds", "0",
+                                       "--param", item])
+    assert result.exit_code != 0 and message in result.output, result.output

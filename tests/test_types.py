@@ -119,3 +119,25 @@ def test_pose_arrays_are_read_only_and_right():
 
 def test_status_ok():
     assert [s.ok for s in LaneStatus] == [True, True, False, False, False]
+
+
+def test_lane_params_from_overrides():
+    p = LaneParams.from_overrides(["max_cone_spacing_m=6", " max_iterations = 500 "])
+    assert p.max_cone_spacing_m == 6.0 and isinstance(p.max_cone_spacing_m, float)
+    assert p.max_iterations == 500 and isinstance(p.max_iterations, int)
+    assert p.min_width_m == LaneParams().min_width_m  # the rest stay the defaults
+    assert LaneParams.from_overrides({"w_benefit": 3}).w_benefit == 3.0
+    assert LaneParams.from_overrides([]) == LaneParams()
+
+
+@pytest.mark.parametrize("items, message", [
+    (["nope=1"], "no field 'nope'"),
+    (["max_iterations=1.5"], "takes an integer"),
+    (["w_benefit=abc"], "takes a number"),
+    (["w_benefit"], "give a value"),
+    (["min_width_m=9"], "must be below max_width_m"),  # __post_init__'s checks still apply
+    (["w_benefit=nan"], "finite"),
+])
+def test_lane_params_from_overrides_refuses(items, message):
+    with pytest.raises(ValueError, match=message):
+        LaneParams.from_overrides(items)
