@@ -223,7 +223,10 @@ class RldModel:
             return verdicts[key]
 
         def solve_loop(result):
+            """Solve with cycle and lane cuts; returns (result, rejected): ``rejected`` when
+            the last lane found is one the shared predicate rejects (the cuts ran out)."""
             cuts = 0  # this loop's lane cuts (stats["lane_cut_rounds"] counts every loop's)
+            rejected = False
             while True:
                 while True:
                     remaining = budget - (time.perf_counter() - t_solve)
@@ -246,30 +249,20 @@ class RldModel:
                 if cycles or len(paths) != 2:
                     break
                 pl, pr = self._orient(program, paths, sub, pose)
-                if (feasible(pl, pr)
+                rejected = not feasible(pl, pr)
+                if (not rejected
                         or cuts >= MAX_LANE_CUT_ROUNDS
                         or budget - (time.perf_counter() - t_solve) <= 0):
                     break
                 cuts += 1
                 stats["lane_cut_rounds"] += 1
                 lane_cut(program, pl, pr)
-            return result
+            return result, rejected
 
-        def no_lane(result) -> bool:
-            """The program is infeasible, or its best lane is one the shared predicate
-            rejects (the lane cuts ran out)."""
-            if result.x is None:
-                return result.status == "infeasible"
-            if not check:
-                return False
-            paths, cycles = _split(program, result.x)
-            if cycles or len(paths) != 2:
-                return False
-            return not feasible(*self._orient(program, paths, sub, pose))
-
-        result = solve_loop(None)
-        heading_rows = program.family == "heading"
-        if (HEADING_FALLBACK and heading_rows.any() and no_lane(result)
+        result, rejected = solve_loop(None)
+        no_lane = rejected if result.x is not None else result.status == "infeasible"
+        heading_rows = (program.family == "heading") if HEADING_FALLBACK and no_lane else None
+        if (heading_rows is not None and heading_rows.any()
                 and budget - (time.perf_counter() - t_solve) > 0):
             # Eq. 9 in a bend: the boundaries beside the car can turn more than
             # heading_tolerance_rad from the car's heading, and the row then leaves no lane at
@@ -278,7 +271,7 @@ class RldModel:
             # lane cuts made so far stay.
             program.row_lo[heading_rows] = -np.inf
             stats["heading_relaxed"] = True
-            result = solve_loop(None)
+            result, _ = solve_loop(None)
         stats["solve_time_s"] = time.perf_counter() - t_solve
         if getattr(self.backend, "last_name", ""):
             stats["backend"] = f"{self.backend.name}:{self.backend.last_name}"

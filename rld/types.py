@@ -364,14 +364,15 @@ class LaneParams:
         type (an int field wants an integer). ValueError naming the field for an unknown name,
         a value that does not parse or one the checks of ``__post_init__`` refuse."""
         base = cls()
+        known = [f.name for f in fields(cls)]
         pairs = items.items() if hasattr(items, "items") else [
             tuple(str(t).split("=", 1)) if "=" in str(t) else (str(t), None) for t in items]
         kw = {}
         for name, value in pairs:
             name = str(name).strip()
-            if not hasattr(base, name) or name.startswith("_"):
+            if name not in known:  # a property such as max_angle_cost is no field
                 raise ValueError(f"LaneParams has no field {name!r}; fields: "
-                                 + ", ".join(f.name for f in fields(cls)))
+                                 + ", ".join(known))
             if value is None:
                 raise ValueError(f"give a value: {name}=VALUE")
             kind = type(getattr(base, name))
