@@ -226,8 +226,8 @@ class RldModel:
             """Solve with cycle and lane cuts; returns (result, rejected): ``rejected`` when
             the last lane found is one the shared predicate rejects (the cuts ran out)."""
             cuts = 0  # this loop's lane cuts (stats["lane_cut_rounds"] counts every loop's)
-            rejected = False
             while True:
+                rejected = False
                 while True:
                     remaining = budget - (time.perf_counter() - t_solve)
                     if remaining <= 0 and result is not None:
