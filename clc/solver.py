@@ -335,6 +335,11 @@ class ClcModel:
             self.ranker = get_ranker("longest")
             self.ranker_name = "longest (no learned model)"
         self._prev: tuple[np.ndarray, np.ndarray] | None = None
+        #: Called as ``judge_hook(points, pose, winner, contenders)`` before each decision of
+        #: the dive judge (``_cheapest``): ``winner`` is (left, right, closed, score), each
+        #: contender (left, right, closed, score or None for an unchecked local edit). For
+        #: ``rld bench clc-judge`` (benchmarks/bench_clc_judge.py); None in normal use.
+        self.judge_hook = None
 
     def reset(self) -> None:
         """Forget the previous lane (no warm start on the next call)."""
@@ -468,6 +473,8 @@ class ClcModel:
                 break
             if cost is None:
                 cost = dive_cost(points, pose, p, *winner[:3])
+            if self.judge_hook is not None:
+                self.judge_hook(points, pose, winner, contenders)
             best, best_cost, _ = self._cheapest(points, pose, contenders, cost)
             if best is None:
                 break
@@ -486,8 +493,10 @@ class ClcModel:
                 break
             if cost is None:
                 cost = dive_cost(points, pose, p, *winner[:3])
-            best, best_cost, checked = self._cheapest(
-                points, pose, [(a, b, False, None) for a, b in trials], cost)
+            trials = [(a, b, False, None) for a, b in trials]
+            if self.judge_hook is not None:
+                self.judge_hook(points, pose, winner, trials)
+            best, best_cost, checked = self._cheapest(points, pose, trials, cost)
             counts["outward_drops"] += checked
             if best is None:
                 break

@@ -505,6 +505,41 @@ def bench_clc_failures(ranges: str, fp_rates: str, seeds: str, every: int, proce
         raise click.ClickException(str(exc)) from exc
     _emit(mod.to_markdown(results), out)
 
+@bench.command("clc-judge")
+@click.option("--source", type=click.Choice(["shared", "generated"]), default="shared",
+              show_default=True, help="The dataset tracks, or generated ones.")
+@click.option("--tracks", default=None,
+              help="Comma-separated track ids (shared: default all; generated: their seeds).")
+@click.option("--cells", default="30:0.1,30:0.3,50:0.3", show_default=True,
+              help="Comma-separated RANGE_M:FP_RATE cells.")
+@click.option("--seed", "seeds", default="5", show_default=True,
+              help="Comma-separated seeds of the false positives, pooled.")
+@click.option("--every", default=1, show_default=True, help="Every k-th pose of each lap.")
+@click.option("--fit", "fit_weights", is_flag=True,
+              help="Also fit the judge's weights (leave one track out, and on all).")
+@click.option("--processes", default=2, show_default=True)
+@click.option("--out", default=None, help="Also write the Markdown table to this file.")
+def bench_clc_judge(source: str, tracks: str | None, cells: str, seeds: str, every: int,
+                    fit_weights: bool, processes: int, out: str | None) -> None:
+    """How often CLC's dive judge picks a right lane when it has one, and what weights fitted
+    to its decisions would do (benchmarks/bench_clc_judge.py)."""
+    mod = _benchmark_module("bench_clc_judge")
+    try:
+        parsed = [tuple(float(v) for v in c.split(":")) for c in cells.split(",")]
+        if any(len(c) != 2 for c in parsed):
+            raise ValueError
+    except ValueError as exc:
+        raise click.BadParameter(f"{cells!r}: expected RANGE_M:FP_RATE,...",
+                                 param_hint="--cells") from exc
+    try:
+        result = mod.run(source, [int(t) for t in tracks.split(",")] if tracks else None,
+                         parsed, [int(s) for s in seeds.split(",")], every, fit_weights,
+                         processes)
+    except (FileNotFoundError, ValueError) as exc:
+        raise click.ClickException(str(exc)) from exc
+    _emit(mod.to_markdown(result), out)
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()
 

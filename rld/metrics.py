@@ -31,6 +31,9 @@ __all__ = [
     "true_lane_extent",
     "true_sides",
     "true_polygon",
+    "true_lines",
+    "tolerant_skips",
+    "diverges_early",
     "lane_iou",
     "candidate_ious",
     "lane_iou20",
@@ -400,6 +403,47 @@ class PoseScore:
         return self.category_tolerant in CRITICAL
 
 
+def true_lines(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
+    """Each side's true boundary line through its mapped cones ((k, 2) metres, left and
+    right; a closed boundary's line returns to its first cone)."""
+    lines = []
+    for seq in (frame.left_seq, frame.right_seq):
+        line = frame.cones[seq[seq >= 0]]
+        if frame.closed and line.shape[0] > 2:
+            line = np.vstack([line, line[:1]])
+        lines.append(line)
+    return lines[0], lines[1]
+
+
+def tolerant_skips(frame: Frame, lines: tuple[np.ndarray, np.ndarray] | None = None
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """The tolerant rule's passed-over points per side (bool per cone of ``frame``): on no
+    boundary, and within ``TOLERANT_DISTANCE_M`` of that side's true line (``true_lines``)."""
+    lines = true_lines(frame) if lines is None else lines
+    on_boundary = np.zeros(frame.cones.shape[0], dtype=bool)
+    for seq in (frame.left_seq, frame.right_seq):
+        on_boundary[seq[seq >= 0]] = True
+    return tuple(~on_boundary & (geo.point_polyline_distance(frame.cones, line)
+                                 <= TOLERANT_DISTANCE_M) for line in lines)
+
+
+def diverges_early(frame: Frame, left: np.ndarray, right: np.ndarray,
+                   skips: tuple[np.ndarray, np.ndarray] | None = None) -> bool:
+    """Whether the lane ``left``, ``right`` (frame indices, a lane that was found) is critical
+    by the tolerant rule: a side diverges below ``CRITICAL_DISTANCE_M``. The same answer as
+    ``score_lane(...).critical_tolerant`` for a lane found, without the IoU and lengths
+    (``skips``: ``tolerant_skips(frame)``, computed once per frame by a caller that asks for
+    many lanes)."""
+    skips = tolerant_skips(frame) if skips is None else skips
+    ds = [s.distance_m for s in (
+        side_divergence(np.asarray(p, dtype=np.int64), gt, seq, frame.cones, frame.pose.xy,
+                        frame.closed, skip)
+        for p, gt, seq, skip in ((left, frame.gt_left, frame.left_seq, skips[0]),
+                                 (right, frame.gt_right, frame.right_seq, skips[1])))
+          if s.diverged]
+    return bool(ds) and min(ds) < CRITICAL_DISTANCE_M
+
+
 def score_lane(
     frame: Frame, left: np.ndarray, right: np.ndarray, ok: bool = True, closed: bool = False
 ) -> PoseScore:
@@ -428,27 +472,17 @@ def score_lane(
     exact = (
         np.array_equal(left, frame.gt_left) and np.array_equal(right, frame.gt_right)
     )
-    on_boundary = np.zeros(cones.shape[0], dtype=bool)
-    lines = []  # each side's true boundary line through its mapped cones
-    for seq in (frame.left_seq, frame.right_seq):
-        on_boundary[seq[seq >= 0]] = True
-        line = cones[seq[seq >= 0]]
-        if frame.closed and line.shape[0] > 2:
-            line = np.vstack([line, line[:1]])
-        lines.append(line)
+    lines = true_lines(frame)
     deviation = max(boundary_deviation(cones[pred], line, frame.pose.xy, closed)
                     for pred, line in ((left, lines[0]), (right, lines[1])))
+    skips = tolerant_skips(frame, lines)
     results = []
     for tolerant in (False, True):
         sides = []
-        for pred, gt, seq, line in ((left, frame.gt_left, frame.left_seq, lines[0]),
-                                    (right, frame.gt_right, frame.right_seq, lines[1])):
-            skip = None
-            if tolerant:
-                near = geo.point_polyline_distance(cones, line) <= TOLERANT_DISTANCE_M
-                skip = ~on_boundary & near
+        for pred, gt, seq, skip in ((left, frame.gt_left, frame.left_seq, skips[0]),
+                                    (right, frame.gt_right, frame.right_seq, skips[1])):
             sides.append(side_divergence(pred, gt, seq, cones, frame.pose.xy, frame.closed,
-                                         skip))
+                                         skip if tolerant else None))
         cat = categorize(True, exact, (sides[0], sides[1]), iou, pred_len, true_len)
         results.append((cat, min(s.distance_m for s in sides)))
     return PoseScore(
