@@ -15,7 +15,10 @@ tolerant rule (``rld.metrics.diverges_early``). ``accuracy`` is the share of tho
 set of weights picks a right lane, by the judge's own rule. ``fit`` searches the weights
 (coordinate steps on each, from today's) for the highest accuracy on the decisions given.
 
-The decisions are on-policy for today's judge: a judge with other weights makes other
+The lanes are labelled as the judge sees them: before the winner is trimmed to its first cone
+not behind the car (``clc.search.trim_behind``) and unhooked (``clc.search.unhook``); the
+protocol allows a lane to begin with true cones behind the car, so the trim rarely changes a
+label. The decisions are on-policy for today's judge: a judge with other weights makes other
 decisions later in the same call. So a fitted accuracy says where to look, not what the
 protocol will measure; the protocol (``rld eval --param``) says that
 (docs/clc.md, "A judge fitted to its own decisions").
@@ -153,6 +156,8 @@ def collect(track, track_id: int, range_m: float, fp_rate: float, seed: int = 0,
                 out.append(Decision(track_id, seed, k, terms(points, pose, params, lanes),
                                     right))
 
+        # Through LaneSolver, as the protocol solves (its input checks and cone handling);
+        # the hook sits on the CLC model it wraps.
         solver = LaneSolver("clc", params)
         solver._impl.model.judge_hook = hook
         solver.solve(frame.cones, frame.pose)

@@ -430,10 +430,13 @@ def tolerant_skips(frame: Frame, lines: tuple[np.ndarray, np.ndarray] | None = N
 def diverges_early(frame: Frame, left: np.ndarray, right: np.ndarray,
                    skips: tuple[np.ndarray, np.ndarray] | None = None) -> bool:
     """Whether the lane ``left``, ``right`` (frame indices, a lane that was found) is critical
-    by the tolerant rule: a side diverges below ``CRITICAL_DISTANCE_M``. The same answer as
+    by the tolerant rule: a side diverges below ``CRITICAL_DISTANCE_M``, or both sides are
+    empty. The same answer as
     ``score_lane(...).critical_tolerant`` for a lane found, without the IoU and lengths
     (``skips``: ``tolerant_skips(frame)``, computed once per frame by a caller that asks for
     many lanes)."""
+    if len(left) == 0 and len(right) == 0:
+        return True  # score_lane's "failed"
     skips = tolerant_skips(frame) if skips is None else skips
     ds = [s.distance_m for s in (
         side_divergence(np.asarray(p, dtype=np.int64), gt, seq, frame.cones, frame.pose.xy,

@@ -73,6 +73,7 @@ def test_fit_finds_the_separating_term():
 
 
 def test_diverges_early_is_the_tolerant_critical_rule(lap):
+    seen = set()
     for k in range(0, len(lap), 25):
         f = lap.frame(k)
         skips = tolerant_skips(f)
@@ -81,10 +82,15 @@ def test_diverges_early_is_the_tolerant_critical_rule(lap):
         lanes = [(gl, gr), (gl[:3], gr)]
         if gl.size >= 3 and others.size:
             lanes.append((np.r_[gl[:1], others[:1], gl[1:]], gr))
+        empty = np.zeros(0, dtype=np.int64)
+        assert diverges_early(f, empty, empty, skips)  # score_lane's "failed"
+        assert score_lane(f, empty, empty, True, False).critical_tolerant
         for a, b in lanes:
             want = score_lane(f, a, b, True, False).critical_tolerant
             assert diverges_early(f, a, b, skips) == want
             assert diverges_early(f, a, b) == want
+            seen.add(want)
+    assert seen == {True, False}  # both answers were checked
 
 
 def test_collect_keeps_mixed_decisions_labelled_by_the_protocol():
