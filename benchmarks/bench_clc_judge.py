@@ -104,7 +104,9 @@ def fit(decisions: Sequence[Decision], w0: np.ndarray, sweeps: int = 4,
     restarts from 1 / its term's spread), kept when the accuracy rises; up to ``sweeps``
     rounds, fewer when one changes nothing."""
     w = np.asarray(w0, dtype=np.float64).copy()
-    spread = np.concatenate([d.terms for d in decisions]).std(axis=0) if decisions else None
+    if not decisions:
+        return w
+    spread = np.concatenate([d.terms for d in decisions]).std(axis=0)
     best = accuracy(decisions, w)
     for _ in range(sweeps):
         moved = False

@@ -435,16 +435,18 @@ def diverges_early(frame: Frame, left: np.ndarray, right: np.ndarray,
     ``score_lane(...).critical_tolerant`` for a lane found, without the IoU and lengths
     (``skips``: ``tolerant_skips(frame)``, computed once per frame by a caller that asks for
     many lanes)."""
-    if len(left) == 0 and len(right) == 0:
-        return True  # score_lane's "failed"
     skips = tolerant_skips(frame) if skips is None else skips
-    ds = [s.distance_m for s in (
+    sides = tuple(
         side_divergence(np.asarray(p, dtype=np.int64), gt, seq, frame.cones, frame.pose.xy,
                         frame.closed, skip)
         for p, gt, seq, skip in ((left, frame.gt_left, frame.left_seq, skips[0]),
                                  (right, frame.gt_right, frame.right_seq, skips[1])))
-          if s.diverged]
-    return bool(ds) and min(ds) < CRITICAL_DISTANCE_M
+    # categorize is the one home of the categories: a lane that diverges is critical or not
+    # by its divergence alone, so the IoU and lengths it would read otherwise are not needed
+    # (nan and 0: only near_gt / too_short / diverging_ge20 would depend on them). Not exact:
+    # an exact lane does not diverge, and is no more critical as "gt" than as near_gt.
+    ok = len(left) > 0 or len(right) > 0  # both sides empty: score_lane's "failed"
+    return categorize(ok, False, sides, math.nan, (0.0, 0.0), (0.0, 0.0)) in CRITICAL
 
 
 def score_lane(

@@ -70,6 +70,7 @@ def test_fit_finds_the_separating_term():
     w = B.fit(d, w0)
     assert B.accuracy(d, w) == 1.0
     assert w[5] * 2.0 > 2.5 and w[1] == w0[1]
+    assert np.array_equal(B.fit([], w0), w0)  # nothing to fit: today's weights
 
 
 def test_diverges_early_is_the_tolerant_critical_rule(lap):
