@@ -131,16 +131,17 @@ class Frame:
 
 
 def frames(seed: int = 0, poses: int = 60, range_m: float = 20.0,
-           params: LaneParams | None = None):
-    """Every frame of the experiment, topology by topology and ratio by ratio."""
+           params: LaneParams | None = None, fp_clearance_m: float = 0.0):
+    """Every frame of the experiment, topology by topology and ratio by ratio.
+    ``fp_clearance_m`` > 0 draws the false positives only at least that far from both true
+    boundary lines (an analysis knob, as ``rld.simulation``'s; 0 is the experiment)."""
     params = params or LaneParams(max_cones=12)
     for name, track in topologies(seed).items():
         c = track.centerline(1.0)
         tangent = np.roll(c, -1, axis=0) - np.roll(c, 1, axis=0)
         if not track.closed:
             c, tangent = c[5:-60], tangent[5:-60]  # keep the window on the straight
-        lines = [track.cones[s] if not track.closed else track.cones[np.r_[s, s[:1]]]
-                 for s in (track.left, track.right)]
+        lines = track.boundary_lines()
         rng = np.random.default_rng(seed)
         for ratio_name, ratio in RATIOS.items():
             for k in np.linspace(0, c.shape[0] - 1, poses).astype(int):
@@ -148,10 +149,17 @@ def frames(seed: int = 0, poses: int = 60, range_m: float = 20.0,
                             float(math.atan2(tangent[k, 1], tangent[k, 0])))
                 idx = np.flatnonzero(_field(track.cones, pose, range_m))
                 n_fp = int(round(ratio * idx.size))
-                fp = []
+                fp, empty = [], 0
                 while len(fp) < n_fp:
                     cand = pose.xy + rng.uniform(-range_m, range_m, size=(4 * n_fp + 8, 2))
-                    fp.extend(cand[_field(cand, pose, range_m)].tolist())
+                    keep = _field(cand, pose, range_m)
+                    if fp_clearance_m > 0:
+                        keep[keep] = track.boundary_distance(cand[keep]) >= fp_clearance_m
+                    fp.extend(cand[keep].tolist())
+                    empty = 0 if keep.any() else empty + 1
+                    if empty >= 100:
+                        raise ValueError(f"no room for false positives {fp_clearance_m:g} m "
+                                         "from the boundaries within the field")
                 fp = np.array(fp[:n_fp]).reshape(-1, 2)
                 points = np.vstack([track.cones[idx], fp])
                 window, _ = cone_window(points, pose, params)
@@ -219,20 +227,22 @@ def truth_in_program(frame: Frame, params: LaneParams) -> float | None:
     return program.objective(x) if program.is_feasible(x) else None
 
 
-def _all_frames(seeds: Sequence[int], poses: int, range_m: float, params: LaneParams):
+def _all_frames(seeds: Sequence[int], poses: int, range_m: float, params: LaneParams,
+                fp_clearance_m: float = 0.0):
     for seed in seeds:
-        for frame in frames(seed, poses, range_m, params):
+        for frame in frames(seed, poses, range_m, params, fp_clearance_m):
             yield seed, frame
 
 
 def run(backend: str = "cpsat", n_cones: int = 12, poses: int = 60, range_m: float = 20.0,
         seeds: Sequence[int] = (0,), time_limit_s: float = 0.4, progress: bool = True,
-        method: str = "rld", **overrides) -> list[dict]:
+        method: str = "rld", fp_clearance_m: float = 0.0, **overrides) -> list[dict]:
     """One row per (topology, ratio), the seeds pooled: inaccurate % (strict and tolerant), the
     failed checks, no-lane count, median latency, and ``per_seed``: each seed's inaccurate and
     tolerant counts. A seed draws the curvy track (``generate_track(seed + 11)``, whose
     position noise is itself drawn from 0.1-0.3 m), the other tracks' noise and the false
-    positives. ``overrides`` are ``LaneParams`` fields."""
+    positives. ``fp_clearance_m``: see ``frames``. ``overrides`` are ``LaneParams``
+    fields."""
     import time
     from collections import Counter
 
@@ -242,7 +252,7 @@ def run(backend: str = "cpsat", n_cones: int = 12, poses: int = 60, range_m: flo
     cells: dict[tuple[str, str], dict] = {}
     bar = tqdm(total=len(seeds) * len(topologies(0)) * len(RATIOS) * poses, desc="rld paper",
                disable=not progress)
-    for seed, frame in _all_frames(seeds, poses, range_m, params):
+    for seed, frame in _all_frames(seeds, poses, range_m, params, fp_clearance_m):
         cell = cells.setdefault((frame.topology, frame.ratio), {
             "topology": frame.topology, "ratio": frame.ratio, "no_lane": 0,
             "checks": Counter(), "lat": [],

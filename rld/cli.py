@@ -505,6 +505,54 @@ def bench_clc_failures(ranges: str, fp_rates: str, seeds: str, every: int, proce
         raise click.ClickException(str(exc)) from exc
     _emit(mod.to_markdown(results), out)
 
+@bench.command("fp-clearance")
+@click.option("--clearances", default="0,0.5,1,1.5,2", show_default=True,
+              help="Comma-separated least distances of the false positives from the true "
+                   "boundary lines, metres (0: the experiment as it is).")
+@click.option("--methods", default="clc,rld", show_default=True,
+              help="clc (the protocol on the shared tracks), rld (the paper's experiment).")
+@click.option("--cells", default="30:0.1,30:0.3,50:0.3", show_default=True,
+              help="CLC's RANGE_M:FP_RATE cells, comma-separated.")
+@click.option("--seed", "seeds", default="0,1,2,3,4", show_default=True,
+              help="Comma-separated seeds, pooled.")
+@click.option("--every", default=1, show_default=True, help="CLC: every k-th pose of each lap.")
+@click.option("--processes", default=2, show_default=True)
+@click.option("--out", default=None, help="Also write the Markdown tables to this file.")
+@click.option("--plot", "plot_path", default=None,
+              help="Also draw the rates against the clearance to this PNG.")
+def bench_fp_clearance(clearances: str, methods: str, cells: str, seeds: str, every: int,
+                       processes: int, out: str | None, plot_path: str | None) -> None:
+    """How much of CLC's and RLD's failures come from false positives near the true
+    boundaries: the accuracy experiments rerun with the false positives kept a distance from
+    the true lines (benchmarks/bench_fp_clearance.py). An analysis, not a target."""
+    mod = _benchmark_module("bench_fp_clearance")
+    chosen = {m.strip() for m in methods.split(",") if m.strip()}
+    if not chosen or chosen - {"clc", "rld"}:
+        raise click.BadParameter(f"{methods!r}: use clc, rld or both", param_hint="--methods")
+    try:
+        cs = mod.parse_clearances(clearances)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="--clearances") from exc
+    try:
+        parsed = [tuple(float(v) for v in c.split(":")) for c in cells.split(",")]
+        if any(len(c) != 2 for c in parsed):
+            raise ValueError
+    except ValueError as exc:
+        raise click.BadParameter(f"{cells!r}: expected RANGE_M:FP_RATE,...",
+                                 param_hint="--cells") from exc
+    seed_list = [int(s) for s in seeds.split(",") if s.strip()]
+    try:
+        clc_rows = (mod.run_clc(cs, seed_list, parsed, every, processes)
+                    if "clc" in chosen else [])
+        rld_rows = mod.run_rld(cs, seed_list) if "rld" in chosen else []
+    except (FileNotFoundError, ValueError) as exc:
+        raise click.ClickException(str(exc)) from exc
+    _emit(mod.to_markdown(clc_rows, rld_rows), out)
+    if plot_path:
+        mod.plot(clc_rows, rld_rows, plot_path)
+        click.echo(f"wrote {plot_path}")
+
+
 @bench.command("clc-judge")
 @click.option("--source", type=click.Choice(["shared", "generated"]), default="shared",
               show_default=True, help="The dataset tracks, or generated ones.")

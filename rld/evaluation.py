@@ -85,13 +85,16 @@ def run_protocol(
     options: dict | None = None,
     label: str | None = None,
     plot_failures: str | None = None,
+    fp_clearance_m: float = 0.0,
 ) -> list[PoseRecord]:
     """Score ``method`` at every ``every``-th pose of each track's lap.
 
     ``stateful`` keeps one ``LaneSolver`` per lap (warm starts, as on the car); otherwise each
     pose gets a fresh solver (the stateless ``solve_lane``). Latency is the whole call.
     ``label`` names the method in the records (default: ``method``); ``plot_failures``, a
-    folder, gets a picture of every critical failure (strict rule).
+    folder, gets a picture of every critical failure (strict rule). ``fp_clearance_m``: the
+    false positives' least distance from the true boundary lines, an analysis knob (0 in the
+    protocol; ``rld.simulation``).
     """
     records: list[PoseRecord] = []
     tracks = list(tracks)
@@ -108,7 +111,8 @@ def run_protocol(
     from rld.tracker import LaneTracker
 
     for track in tracks:
-        lap = simulate_lap(track, range_m=range_m, fp_rate=fp_rate, seed=seed)
+        lap = simulate_lap(track, range_m=range_m, fp_rate=fp_rate, seed=seed,
+                           fp_clearance_m=fp_clearance_m)
         solver = make() if stateful else None
         tracker = LaneTracker()  # for the stability of the tracked lane, whatever the method
         prev = None  # (pose, raw centreline, tracked centreline) of the previous pose

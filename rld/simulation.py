@@ -12,6 +12,11 @@ Along one lap of a track with annotated boundaries:
 5. the ground-truth lane at pose k: per side, the labelled cones from the one nearest the car
    (not behind it) forward, up to the first cone not yet in the map;
 6. the method sees the partial map shuffled (seeded per pose), without labels.
+
+``fp_clearance_m`` (0 in the protocol) is an analysis knob, not part of the protocol: false
+positives are then drawn only at least that far from both true boundary lines
+(``Track.boundary_distance``), the same number of them. Sweeping it says how much of a method's
+failures come from false positives near the true boundaries (``rld bench fp-clearance``).
 """
 
 from __future__ import annotations
@@ -84,12 +89,16 @@ class Lap:
         fp_rate: float = 0.0,
         seed: int = 0,
         step_m: float = 1.0,
+        fp_clearance_m: float = 0.0,
     ) -> None:
         if not 0.0 <= fp_rate < 1.0:
             raise ValueError(f"fp_rate must be in [0, 1), got {fp_rate}")
         if not range_m > 0 or not np.isfinite(range_m):
             raise ValueError(f"range_m must be a positive number, got {range_m}")
+        if not (np.isfinite(fp_clearance_m) and fp_clearance_m >= 0):
+            raise ValueError(f"fp_clearance_m must be a number >= 0, got {fp_clearance_m}")
         self.track = track
+        self.fp_clearance_m = float(fp_clearance_m)
         self.range_m = float(range_m)
         self.fp_rate = float(fp_rate)
         self.seed = int(seed)
@@ -118,11 +127,18 @@ class Lap:
         hi = self.centerline.max(axis=0) + self.range_m
         out: list[np.ndarray] = []
         have = 0
+        empty = 0  # draws in a row that kept nothing: a clearance that leaves no room
         while have < count:
             cand = rng.uniform(lo, hi, size=(max(4 * count, 256), 2))
             ok = in_field(cand, self.centerline, self.headings, self.range_m).any(axis=0)
+            if self.fp_clearance_m > 0:
+                ok[ok] = self.track.boundary_distance(cand[ok]) >= self.fp_clearance_m
             out.append(cand[ok])
             have += int(ok.sum())
+            empty = 0 if ok.any() else empty + 1
+            if empty >= 100:
+                raise ValueError(f"no room for false positives {self.fp_clearance_m:g} m from "
+                                 "the boundaries within the perception field")
         return np.vstack(out)[:count]
 
     def __len__(self) -> int:
@@ -182,7 +198,10 @@ class Lap:
 
 
 def simulate_lap(
-    track: Track, range_m: float = 50.0, fp_rate: float = 0.0, seed: int = 0, step_m: float = 1.0
+    track: Track, range_m: float = 50.0, fp_rate: float = 0.0, seed: int = 0, step_m: float = 1.0,
+    fp_clearance_m: float = 0.0,
 ) -> Lap:
-    """Set up the protocol's lap over ``track`` (see ``Lap``)."""
-    return Lap(track, range_m=range_m, fp_rate=fp_rate, seed=seed, step_m=step_m)
+    """Set up the protocol's lap over ``track`` (see ``Lap``; ``fp_clearance_m``, the module
+    docstring: 0 in the protocol)."""
+    return Lap(track, range_m=range_m, fp_rate=fp_rate, seed=seed, step_m=step_m,
+               fp_clearance_m=fp_clearance_m)

@@ -120,6 +120,21 @@ class Track:
         xy = self.left_xy if side == "left" else self.right_xy
         return geo.polyline_length(xy, closed=self.closed)
 
+    def boundary_lines(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each boundary as a polyline through its cones ((k, 2) metres, left and right); a
+        closed track's lines return to their first cone."""
+        return tuple(xy if not self.closed or xy.shape[0] < 3 else np.vstack([xy, xy[:1]])
+                     for xy in (self.left_xy, self.right_xy))
+
+    def boundary_distance(self, points: np.ndarray) -> np.ndarray:
+        """(P,) distance in metres from each of ``points`` (P, 2) to the nearer boundary line
+        (``boundary_lines``); inf when the track has no boundary cones."""
+        points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        out = np.full(points.shape[0], np.inf)
+        for line in self.boundary_lines():
+            out = np.minimum(out, geo.point_polyline_distance(points, line))
+        return out
+
     def centerline(self, resolution_m: float = 1.0) -> np.ndarray:
         """The track's centreline every ``resolution_m`` metres, from the first cones on."""
         return geo.centerline(self.left_xy, self.right_xy, self.closed, resolution_m)
