@@ -505,6 +505,7 @@ def bench_clc_failures(ranges: str, fp_rates: str, seeds: str, every: int, proce
         raise click.ClickException(str(exc)) from exc
     _emit(mod.to_markdown(results), out)
 
+
 @bench.command("fp-clearance")
 @click.option("--clearances", default="0,0.5,1,1.5,2", show_default=True,
               help="Comma-separated least distances of the false positives from the true "
