@@ -33,7 +33,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rld import geometry as geo
 from rld.api import LaneSolver
 from rld.constraints import c_poly, overlap_widths
 from rld.generator import generate_track
@@ -141,7 +140,6 @@ def frames(seed: int = 0, poses: int = 60, range_m: float = 20.0,
         tangent = np.roll(c, -1, axis=0) - np.roll(c, 1, axis=0)
         if not track.closed:
             c, tangent = c[5:-60], tangent[5:-60]  # keep the window on the straight
-        lines = track.boundary_lines()
         rng = np.random.default_rng(seed)
         for ratio_name, ratio in RATIOS.items():
             for k in np.linspace(0, c.shape[0] - 1, poses).astype(int):
@@ -172,9 +170,7 @@ def frames(seed: int = 0, poses: int = 60, range_m: float = 20.0,
                     expected |= {pos[t] for t in core}
                     behind |= {pos[t] for t in back}
                     truth.append(np.array([pos[t] for t in core], dtype=np.int64))
-                near = np.zeros(fp.shape[0], dtype=bool)
-                for line in lines:
-                    near |= geo.point_polyline_distance(fp, line) <= TOLERANT_DISTANCE_M
+                near = track.boundary_distance(fp) <= TOLERANT_DISTANCE_M
                 on_line = set((idx.size + np.flatnonzero(near)).tolist())
                 yield Frame(name, ratio_name, pose, points, expected, behind, on_line,
                             (truth[0], truth[1]))

@@ -506,6 +506,18 @@ def bench_clc_failures(ranges: str, fp_rates: str, seeds: str, every: int, proce
     _emit(mod.to_markdown(results), out)
 
 
+def _parse_cells(cells: str) -> list[tuple[float, float]]:
+    """``--cells`` "30:0.1,50:0.3" -> [(30.0, 0.1), (50.0, 0.3)]; a usage error otherwise."""
+    try:
+        parsed = [tuple(float(v) for v in c.split(":")) for c in cells.split(",")]
+        if any(len(c) != 2 for c in parsed):
+            raise ValueError
+    except ValueError as exc:
+        raise click.BadParameter(f"{cells!r}: expected RANGE_M:FP_RATE,...",
+                                 param_hint="--cells") from exc
+    return parsed
+
+
 @bench.command("fp-clearance")
 @click.option("--clearances", default="0,0.5,1,1.5,2", show_default=True,
               help="Comma-separated least distances of the false positives from the true "
@@ -534,13 +546,7 @@ def bench_fp_clearance(clearances: str, methods: str, cells: str, seeds: str, ev
         cs = mod.parse_clearances(clearances)
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="--clearances") from exc
-    try:
-        parsed = [tuple(float(v) for v in c.split(":")) for c in cells.split(",")]
-        if any(len(c) != 2 for c in parsed):
-            raise ValueError
-    except ValueError as exc:
-        raise click.BadParameter(f"{cells!r}: expected RANGE_M:FP_RATE,...",
-                                 param_hint="--cells") from exc
+    parsed = _parse_cells(cells)
     seed_list = [int(s) for s in seeds.split(",") if s.strip()]
     try:
         clc_rows = (mod.run_clc(cs, seed_list, parsed, every, processes)
@@ -573,13 +579,7 @@ def bench_clc_judge(source: str, tracks: str | None, cells: str, seeds: str, eve
     """How often CLC's dive judge picks a right lane when it has one, and what weights fitted
     to its decisions would do (benchmarks/bench_clc_judge.py)."""
     mod = _benchmark_module("bench_clc_judge")
-    try:
-        parsed = [tuple(float(v) for v in c.split(":")) for c in cells.split(",")]
-        if any(len(c) != 2 for c in parsed):
-            raise ValueError
-    except ValueError as exc:
-        raise click.BadParameter(f"{cells!r}: expected RANGE_M:FP_RATE,...",
-                                 param_hint="--cells") from exc
+    parsed = _parse_cells(cells)
     try:
         result = mod.run(source, [int(t) for t in tracks.split(",")] if tracks else None,
                          parsed, [int(s) for s in seeds.split(",")], every, fit_weights,

@@ -28,6 +28,7 @@ __all__ = [
     "turn_angles",
     "polyline_turn_angles",
     "polyline_length",
+    "boundary_line",
     "cumulative_length",
     "resample_polyline",
     "point_polyline_distance",
@@ -141,6 +142,12 @@ def polyline_turn_angles(xy: np.ndarray, closed: bool = False) -> np.ndarray:
     out = np.empty(xy.shape[0] if closed else xy.shape[0] - 2)
     gk.polyline_turns(xy, bool(closed), out)
     return out
+
+
+def boundary_line(xy: np.ndarray, closed: bool) -> np.ndarray:
+    """The polyline of a boundary's cones ``xy`` (k, 2): a closed boundary's returns to its
+    first cone (from three cones on; fewer make no loop)."""
+    return np.vstack([xy, xy[:1]]) if closed and xy.shape[0] > 2 else xy
 
 
 def cumulative_length(xy: np.ndarray, closed: bool = False) -> np.ndarray:

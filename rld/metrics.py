@@ -406,13 +406,9 @@ class PoseScore:
 def true_lines(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
     """Each side's true boundary line through its mapped cones ((k, 2) metres, left and
     right; a closed boundary's line returns to its first cone)."""
-    lines = []
-    for seq in (frame.left_seq, frame.right_seq):
-        line = frame.cones[seq[seq >= 0]]
-        if frame.closed and line.shape[0] > 2:
-            line = np.vstack([line, line[:1]])
-        lines.append(line)
-    return lines[0], lines[1]
+    left, right = (geo.boundary_line(frame.cones[seq[seq >= 0]], frame.closed)
+                   for seq in (frame.left_seq, frame.right_seq))
+    return left, right
 
 
 def tolerant_skips(frame: Frame, lines: tuple[np.ndarray, np.ndarray] | None = None

@@ -123,8 +123,8 @@ class Track:
     def boundary_lines(self) -> tuple[np.ndarray, np.ndarray]:
         """Each boundary as a polyline through its cones ((k, 2) metres, left and right); a
         closed track's lines return to their first cone."""
-        return tuple(xy if not self.closed or xy.shape[0] < 3 else np.vstack([xy, xy[:1]])
-                     for xy in (self.left_xy, self.right_xy))
+        return (geo.boundary_line(self.left_xy, self.closed),
+                geo.boundary_line(self.right_xy, self.closed))
 
     def boundary_distance(self, points: np.ndarray) -> np.ndarray:
         """(P,) distance in metres from each of ``points`` (P, 2) to the nearer boundary line
