@@ -48,9 +48,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 from numba.core.options import DefaultOptions
 
+from rld._jit import njit
 from rld.geometry_kernels import (
     grow_2d,
     grow_int,

@@ -14,8 +14,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from rld._jit import njit
 from rld.geometry_kernels import point_polyline_distance_many, turn_angle
 
 #: Length of the feature vector (``rld.costs.FEATURE_NAMES``).

@@ -13,7 +13,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from rld._jit import njit
 
 EPS = 1e-9
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from rld._jit import njit
 
 __all__ = ["evidence_grid", "ridge_mask"]
 
