@@ -5,8 +5,8 @@ Every ranker has ``name`` and ``score(points, pose, params, candidates, features
 one score per candidate, higher is better:
 
 - ``learned``: the RankNet-style 8-100-1 ReLU network of section VII on the features of
-  ``rld.costs.ranking_features``, its weights in ``clc/models/clc_ranker.npz`` (made by
-  ``rld train-ranker``; its JSON card lies beside it).
+  ``rld.costs.ranking_features``, its weights in ``models/clc_ranker.npz`` (installed as
+  ``clc/models``; made by ``rld train-ranker``; its JSON card lies beside it).
 - ``rld_cost``: minus the RLD objective (eq. 29) of each candidate, from the shared cost module,
   so CLC's enumeration and RLD's program can be compared on one objective.
 - ``longest``: the lane length (the paper's "simple but effective heuristic"), ties broken by
@@ -15,6 +15,7 @@ one score per candidate, higher is better:
 
 from __future__ import annotations
 
+import importlib.resources
 import math
 import os
 from collections.abc import Sequence
@@ -30,7 +31,7 @@ __all__ = ["Ranker", "LongestRanker", "RldCostRanker", "LearnedRanker", "get_ran
            "RANKERS", "DEFAULT_MODEL"]
 
 #: Where ``rld train-ranker`` writes the learned ranker and ``LearnedRanker.load`` reads it.
-DEFAULT_MODEL = Path(__file__).resolve().parent / "models" / "clc_ranker.npz"
+DEFAULT_MODEL = Path(str(importlib.resources.files("clc.models") / "clc_ranker.npz"))
 RANKERS = ("learned", "rld_cost", "longest")
 #: The arrays of a learned ranker's ``.npz`` (``clc.train.save_ranker`` writes them).
 _ARRAYS = ("W1", "b1", "w2", "b2", "mean", "std", "feature_names")

@@ -42,8 +42,9 @@ def test_readme_opens_with_the_two_commands():
 
 
 #: A repository path as the docs write it: a top-level folder of the checkout, then a file or
-#: folder name (``docs/huang.md``, ``rld/tracker.py``, ``clc/models``).
-_REPO_PATH = re.compile(r"(?<![\w./-])((?:docs|rld|clc|tests|notebooks|benchmarks)/[\w./-]*\w)")
+#: folder name (``docs/huang.md``, ``rld/tracker.py``, ``models/clc_ranker.npz``).
+_REPO_PATH = re.compile(
+    r"(?<![\w./-])((?:docs|rld|clc|tests|notebooks|benchmarks|models)/[\w./-]*\w)")
 #: The target of a Markdown link or image, ``[text](target)``.
 _LINK = re.compile(r"\]\(([^)\s#]+)[^)]*\)")
 

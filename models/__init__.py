@@ -1,0 +1,1 @@
+"""The CLC ranker's trained weights and card, installed as ``clc.models``."""
