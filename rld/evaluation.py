@@ -2,8 +2,9 @@
 
 ``run_protocol`` drives a method pose by pose along each track's lap (``rld.simulation``) and
 scores every prediction (``rld.metrics``); ``summarize`` turns the records into the per-setting
-figures of the protocol: % per category, critical % (strict and tolerant), mean IoU and IoU20,
-mean predicted and true length, latency median / p95 / max.
+figures of the protocol: geometric critical % at 1 m and 0.5 m (the headline), mean predicted
+and true length and their ratio, too-short %, IoU20; % per category, critical % (strict and
+tolerant), mean IoU; latency median / p95 / max of steady calls, start-up apart.
 """
 
 from __future__ import annotations
@@ -16,12 +17,13 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from rld.api import LaneSolver
-from rld.metrics import CATEGORIES, CRITICAL, OFF_LINE_M, score_lane, stability_ratio
+from rld.metrics import CATEGORIES, CRITICAL, GEOMETRIC_DISTANCES_M, score_lane, stability_ratio
 from rld.simulation import simulate_lap
 from rld.tracks import Track
 from rld.types import LaneParams
 
-__all__ = ["PoseRecord", "run_protocol", "summarize", "lap_interval", "STABILITY_RADII_M"]
+__all__ = ["PoseRecord", "run_protocol", "summarize", "geometric_key", "lap_interval",
+           "STABILITY_RADII_M"]
 
 #: The radii (m) at which the stability ratio of Huang et al. (eq. 5) is recorded.
 STABILITY_RADII_M = (5.0, 10.0, 20.0)
@@ -61,9 +63,13 @@ class PoseRecord:
     tracked_stability_20: float = math.nan
     seed: int = 0
     """Seed of the lap's false positives (``simulate_lap``)."""
-    deviation20_m: float = math.nan
-    """How far the lane strays from the true boundary lines within 20 m of the car
-    (``rld.metrics.boundary_deviation``, m; inf: no lane). NaN in records written before it."""
+    deviation_m: float = math.nan
+    """The geometric rule's deviation (``rld.metrics.geometric_deviation``, m; inf: no lane, or
+    a side missing or starting beyond 20 m). NaN in records written before it."""
+    too_short: bool = False
+    """A lane found with a side under half its true length (``rld.metrics.too_short_sides``)."""
+    first_call: bool = False
+    """The solver's first call (lazy set-up, kernel compilation): start-up, not latency."""
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -90,7 +96,9 @@ def run_protocol(
     """Score ``method`` at every ``every``-th pose of each track's lap.
 
     ``stateful`` keeps one ``LaneSolver`` per lap (warm starts, as on the car); otherwise each
-    pose gets a fresh solver (the stateless ``solve_lane``). Latency is the whole call.
+    pose gets a fresh solver (the stateless ``solve_lane``). Latency is the whole call; a
+    solver's first call (stateful), or the run's first call (stateless), is marked
+    ``first_call``: ``summarize`` reports it as start-up time, apart from the latency.
     ``label`` names the method in the records (default: ``method``); ``plot_failures``, a
     folder, gets a picture of every critical failure (strict rule). ``fp_clearance_m``: the
     false positives' least distance from the true boundary lines, an analysis knob (0 in the
@@ -116,6 +124,7 @@ def run_protocol(
         solver = make() if stateful else None
         tracker = LaneTracker()  # for the stability of the tracked lane, whatever the method
         prev = None  # (pose, raw centreline, tracked centreline) of the previous pose
+        first = stateful or not records
         for k in range(0, len(lap), every):
             frame = lap.frame(k)
             s = solver or make()
@@ -138,10 +147,13 @@ def run_protocol(
                 iterations=int(lane.stats.get("iterations", -1)),
                 complete=lane.stats.get("complete"),
                 seed=int(seed),
-                deviation20_m=sc.deviation20_m,
+                deviation_m=sc.deviation_m,
+                too_short=sc.too_short,
+                first_call=first,
                 **stab,
             ))
-            if plot_failures and sc.critical:
+            first = False
+            if plot_failures and sc.critical_at(min(GEOMETRIC_DISTANCES_M)):
                 _plot_failure(plot_failures, label or method, track.name, frame, lane, sc,
                               range_m, fp_rate, seed)
             if bar is not None:
@@ -180,36 +192,48 @@ def _plot_failure(folder, method, track, frame, lane, sc, range_m, fp_rate, seed
                title=f"{method}, {track}, R {range_m:g} m, FP {fp_rate:.0%} (seed {seed}), "
                      f"pose {frame.index}: {sc.category} (tolerant: {sc.category_tolerant}), "
                      f"diverges at {sc.divergence_m:.1f} m, "
-                     f"{sc.deviation20_m:.1f} m off the lines within 20 m",
+                     f"{sc.deviation_m:.2f} m off the true boundary within 20 m",
                path=str(Path(folder) / f"{name}.png"))
 
 
+def geometric_key(distance_m: float) -> str:
+    """``summarize``'s key of the geometric critical % at ``distance_m``: ``geo_critical_1m``,
+    ``geo_critical_0.5m``."""
+    return f"geo_critical_{distance_m:g}m"
+
+
 def summarize(records: list[PoseRecord]) -> dict:
-    """The protocol's figures for one setting (percentages in %, lengths in m, latency in ms).
-    ``critical_off``: the poses critical by the tolerant rule whose lane also strays more than
-    ``rld.metrics.OFF_LINE_M`` (1 m) from the true boundary lines within 20 m of the car, or
-    that have no lane (ours, beside DESIGN.md's rates: how many critical lanes are far off the
-    track's lines rather than a cone out of order); NaN when a record predates the deviation."""
+    """The protocol's figures for one setting (percentages in %, lengths in m, latency in ms):
+    geometric critical % per ``GEOMETRIC_DISTANCES_M`` (``geometric_key``; NaN when a record
+    predates the rule), ``length_ratio`` (% of the means), ``short`` (too-short %), then the
+    index rule's categories. Latency percentiles leave out first calls (``startup_*``)."""
     n = len(records)
     if n == 0:
         return {"poses": 0}
     cats = [r.category for r in records]
     out: dict = {"poses": n}
+    dev = np.array([r.deviation_m for r in records])
+    for d in GEOMETRIC_DISTANCES_M:
+        out[geometric_key(d)] = (math.nan if np.isnan(dev).any()
+                                 else 100.0 * float(np.mean(dev > d)))
+    out["short"] = 100.0 * float(np.mean([r.too_short for r in records]))
     for c in CATEGORIES:
         out[c] = 100.0 * cats.count(c) / n
     out["critical"] = 100.0 * sum(c in CRITICAL for c in cats) / n
     out["critical_tolerant"] = 100.0 * sum(r.category_tolerant in CRITICAL for r in records) / n
-    if any(math.isnan(r.deviation20_m) for r in records):
-        out["critical_off"] = math.nan
-    else:
-        out["critical_off"] = 100.0 * sum(
-            r.category_tolerant in CRITICAL and r.deviation20_m > OFF_LINE_M for r in records) / n
     iou20 = [r.iou20 for r in records if not math.isnan(r.iou20)]
     out["mean_iou"] = 100.0 * float(np.mean([r.iou for r in records]))
     out["mean_iou20"] = 100.0 * float(np.mean(iou20)) if iou20 else math.nan
     out["pred_length_m"] = float(np.mean([r.pred_length_m for r in records]))
     out["true_length_m"] = float(np.mean([r.true_length_m for r in records]))
-    lat = 1000.0 * np.array([r.latency_s for r in records])
+    out["length_ratio"] = (100.0 * out["pred_length_m"] / out["true_length_m"]
+                           if out["true_length_m"] > 0 else math.nan)
+    start = 1000.0 * np.array([r.latency_s for r in records if r.first_call])
+    out["startup_calls"] = int(start.size)
+    out["startup_median_ms"] = float(np.median(start)) if start.size else math.nan
+    out["startup_max_ms"] = float(start.max()) if start.size else math.nan
+    steady = [r.latency_s for r in records if not r.first_call]
+    lat = 1000.0 * np.array(steady or [r.latency_s for r in records])
     out["latency_median_ms"] = float(np.median(lat))
     out["latency_p95_ms"] = float(np.percentile(lat, 95))
     out["latency_max_ms"] = float(lat.max())
@@ -227,9 +251,11 @@ def summarize(records: list[PoseRecord]) -> dict:
 
 
 def lap_interval(records: Iterable[PoseRecord], tolerant: bool = True, level: float = 0.95,
-                 resamples: int = 2000, seed: int = 0) -> tuple[float, float]:
+                 resamples: int = 2000, seed: int = 0,
+                 geometric_m: float | None = None) -> tuple[float, float]:
     """A percentile bootstrap interval (%, ``level`` two-sided) of the pooled critical rate of
-    ``records`` (tolerant or strict rule), resampling whole laps ``resamples`` times from
+    ``records`` (the geometric rule at ``geometric_m`` metres when given, else the index rule,
+    tolerant or strict), resampling whole laps ``resamples`` times from
     ``seed``, in two levels: the tracks with replacement, then each drawn track's laps (one
     per false-positive seed) with replacement.
 
@@ -246,10 +272,13 @@ def lap_interval(records: Iterable[PoseRecord], tolerant: bool = True, level: fl
         raise ValueError(f"resamples must be at least 1, got {resamples!r}")
     laps: dict[str, dict[int, list[int]]] = {}
     for r in records:
-        cat = r.category_tolerant if tolerant else r.category
+        if geometric_m is not None:
+            hit = r.deviation_m > geometric_m
+        else:
+            hit = (r.category_tolerant if tolerant else r.category) in CRITICAL
         acc = laps.setdefault(r.track, {}).setdefault(r.seed, [0, 0])
         acc[0] += 1
-        acc[1] += cat in CRITICAL
+        acc[1] += bool(hit)
     if not laps:
         raise ValueError("no records")
     rng = np.random.default_rng(seed)

@@ -1,8 +1,10 @@
 """Per-pose metrics of the evaluation protocol (DESIGN.md) and the stability ratio of Huang et
 al. (2009, section 3.5, eq. 5).
 
-Every method is scored by the same functions: lane-polygon IoU, IoU20 (independent of the
-horizon), exact match, per-side divergence (strict, and tolerant of off-boundary points lying on
+Every method is scored by the same functions. The headline is the geometric rule
+(``geometric_deviation``: how far a boundary strays from the true one within 20 m of the car,
+critical beyond 1 m or 0.5 m), beside the lane's length and IoU20. The paper-compatible index
+rule follows: exact match, per-side divergence (strict, and tolerant of off-boundary points on
 the true boundary line, also where they stand in for a true cone) and the six categories, in
 this order of precedence: ``failed``, ``gt``, ``diverging_lt20`` (critical), ``near_gt``,
 ``diverging_ge20``, ``too_short``.
@@ -41,9 +43,14 @@ __all__ = [
     "side_divergence",
     "categorize",
     "score_lane",
-    "OFF_LINE_M",
-    "DEVIATION_STEP_M",
-    "boundary_deviation",
+    "GEOMETRIC_DISTANCES_M",
+    "GEOMETRIC_STEP_M",
+    "reference_line",
+    "kept_part",
+    "densify",
+    "side_deviation",
+    "geometric_deviation",
+    "too_short_sides",
     "circle_crossing",
     "stability_ratio",
     "side_agreement",
@@ -56,13 +63,11 @@ CRITICAL = frozenset({"diverging_lt20", "failed"})
 CRITICAL_DISTANCE_M = 20.0
 TOLERANT_DISTANCE_M = 0.5
 IOU20_HORIZON_M = 20.0
-#: A critical lane whose boundaries stray more than this (m) from the true boundary lines within
-#: ``CRITICAL_DISTANCE_M`` of the car counts as off the line (``summarize``'s ``critical_off``):
-#: the car could be led into a cone or off the track, not only past a wrongly ordered one.
-OFF_LINE_M = 1.0
-#: Sampling step (m) of ``boundary_deviation`` along the predicted polylines; the deviation it
-#: returns is within half of it of the exact supremum (distance to a polyline is 1-Lipschitz).
-DEVIATION_STEP_M = 0.1
+#: The geometric rule's distances (m, DESIGN.md "Geometric critical"): a boundary more than 1 m
+#: off may lead the car off the track; 0.5 m is more than the clearance the rules leave.
+GEOMETRIC_DISTANCES_M = (1.0, 0.5)
+#: Largest gap (m) between the samples of a predicted boundary (DESIGN.md, geometric rule step 3).
+GEOMETRIC_STEP_M = 0.25
 #: A true boundary's cone farther than this (m) from the other true boundary lies past the
 #: lane's known end (``true_lane_extent``). It is ``LaneParams.max_width_m``'s default; no cone of
 #: the shared tracks' whole boundaries is farther than 5.75 m from the other boundary.
@@ -390,9 +395,11 @@ class PoseScore:
     divergence_tolerant_m: float
     pred_length_m: float
     true_length_m: float
-    deviation20_m: float = math.nan
-    """How far the predicted boundaries stray from the true boundary lines within 20 m of the
-    car (``boundary_deviation``, metres, the larger side); inf when there is no lane."""
+    deviation_m: float = math.nan
+    """The geometric rule's deviation (``geometric_deviation``, m; inf: critical at every
+    distance)."""
+    too_short: bool = False
+    """A lane found with a side under half its true length (``too_short_sides``)."""
 
     @property
     def critical(self) -> bool:
@@ -401,6 +408,10 @@ class PoseScore:
     @property
     def critical_tolerant(self) -> bool:
         return self.category_tolerant in CRITICAL
+
+    def critical_at(self, distance_m: float) -> bool:
+        """Critical by the geometric rule at ``distance_m`` (DESIGN.md "Geometric critical")."""
+        return self.deviation_m > distance_m
 
 
 def true_lines(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
@@ -465,7 +476,7 @@ def score_lane(
     if not ok:
         mean_true = float(np.mean(true_len))
         return PoseScore("failed", "failed", 0.0, 0.0, False, 0.0, 0.0, 0.0, mean_true,
-                         math.inf)
+                         math.inf, False)
     gl, gr = true_sides(frame)
     iou = lane_iou(cones[left], cones[right], gl, gr, closed, gt_closed, frame.pose.heading)
     iou = 0.0 if math.isnan(iou) else iou
@@ -473,10 +484,8 @@ def score_lane(
     exact = (
         np.array_equal(left, frame.gt_left) and np.array_equal(right, frame.gt_right)
     )
-    lines = true_lines(frame)
-    deviation = max(boundary_deviation(cones[pred], line, frame.pose.xy, closed)
-                    for pred, line in ((left, lines[0]), (right, lines[1])))
-    skips = tolerant_skips(frame, lines)
+    deviation = geometric_deviation(frame, left, right, True, closed)
+    skips = tolerant_skips(frame)
     results = []
     for tolerant in (False, True):
         sides = []
@@ -496,68 +505,107 @@ def score_lane(
         divergence_tolerant_m=results[1][1],
         pred_length_m=float(np.mean(pred_len)),
         true_length_m=float(np.mean(true_len)),
-        deviation20_m=deviation,
+        deviation_m=deviation,
+        too_short=too_short_sides(pred_len, true_len),
     )
 
 
-def boundary_deviation(
-    pred: np.ndarray,
-    line: np.ndarray,
-    car_xy: np.ndarray,
-    closed: bool = False,
-    radius_m: float = CRITICAL_DISTANCE_M,
-    step_m: float = DEVIATION_STEP_M,
-) -> float:
-    """How far the predicted boundary ``pred`` (its cones in order, (k, 2), metres) strays from
-    the true boundary line ``line`` ((m, 2)) within ``radius_m`` of the car: the largest
-    distance to ``line`` of any point of ``pred``'s polyline (closed: with the closing edge)
-    that lies within ``radius_m`` of ``car_xy``, walking the polyline from its start until it
-    first leaves that circle (``circle_crossing``): the far end of a lane that runs round the
-    loop and back to the car does not count. The polyline is sampled every ``step_m`` or
-    finer, and where it crosses the circle, so the result is within ``step_m / 2`` of the
-    exact supremum. 0 when no point of ``pred`` lies that near (an empty side), inf when
-    ``line`` is empty and one does.
+def too_short_sides(pred_lengths: tuple[float, float], true_lengths: tuple[float, float]) -> bool:
+    """A found lane is too short when a side is under half its true length (m), the length rule
+    of the ``too_short`` category without its divergence test: reported beside the geometric
+    rule, which never counts a short lane."""
+    return any(p < 0.5 * t for p, t in zip(pred_lengths, true_lengths, strict=True))
 
-    Ours, not DESIGN.md's: the divergence rule says where a lane first leaves the true cone
-    order; this says how far the lane is off the true lines, which is what a planner following
-    it would feel. A false positive 0.6 m beside the line that the lane takes is critical
-    by the rule, and 0.6 m off here."""
+
+def reference_line(frame: Frame, side: str) -> np.ndarray:
+    """The geometric rule's reference for ``side`` ("left" / "right"), DESIGN.md step 1: the
+    side's mapped boundary cones in list order from two before its truth's first cone to the
+    truth's last ((k, 2) m; wraps on a closed boundary; empty when the truth is)."""
+    seq, gt = ((frame.left_seq, frame.gt_left) if side == "left"
+               else (frame.right_seq, frame.gt_right))
+    if gt.size == 0:
+        return np.zeros((0, 2))
+    n = seq.size
+    pos = {int(c): k for k, c in enumerate(seq) if c >= 0}
+    p0, p1 = pos[int(gt[0])], pos[int(gt[-1])]
+    if frame.closed:
+        ks = (p0 + np.arange(-2, (p1 - p0) % n + 1 if gt.size < n else n)) % n
+    else:
+        ks = np.arange(max(p0 - 2, 0), p1 + 1)
+    idx = seq[ks]
+    return frame.cones[idx[idx >= 0]]
+
+
+def kept_part(pred: np.ndarray, car_xy: np.ndarray,
+              horizon_m: float = CRITICAL_DISTANCE_M) -> np.ndarray:
+    """The predicted boundary ``pred`` ((k, 2) m, k >= 1) from its first cone to arc length
+    s0 + ``horizon_m``, cut by interpolation; s0: the car's nearest point on the first three
+    segments, the first one's line extended backwards (DESIGN.md, geometric rule step 2)."""
+    pred = np.asarray(pred, dtype=np.float64).reshape(-1, 2)
+    if pred.shape[0] < 2:
+        return pred
+    seg = pred[1:] - pred[:-1]
+    length = np.hypot(seg[:, 0], seg[:, 1])
+    cum = np.concatenate([[0.0], np.cumsum(length)])
+    best, s0 = math.inf, 0.0
+    for i in range(min(3, seg.shape[0])):
+        ll = float(length[i])
+        t = 0.0 if ll == 0.0 else float((car_xy - pred[i]) @ seg[i]) / (ll * ll)
+        t = min(t, 1.0) if i == 0 else min(max(t, 0.0), 1.0)
+        d = float(np.hypot(*(car_xy - pred[i] - t * seg[i])))
+        if d < best - 1e-9:  # a tie keeps the earlier segment
+            best, s0 = d, float(cum[i]) + t * ll
+    end = s0 + horizon_m
+    if end <= 0.0:
+        return pred[:1]
+    if end >= cum[-1]:
+        return pred
+    i = int(np.searchsorted(cum, end, side="right")) - 1  # cum[i] <= end < cum[i + 1]
+    t = (end - cum[i]) / length[i]
+    return np.vstack([pred[: i + 1], pred[i] + t * seg[i]])
+
+
+def densify(xy: np.ndarray, step_m: float = GEOMETRIC_STEP_M) -> np.ndarray:
+    """Every vertex of the polyline ``xy`` and points at most ``step_m`` apart along each of its
+    segments (DESIGN.md, geometric rule step 3), in order."""
+    xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    if xy.shape[0] < 2:
+        return xy
+    seg = xy[1:] - xy[:-1]
+    counts = np.maximum(np.ceil(np.hypot(seg[:, 0], seg[:, 1]) / step_m).astype(np.int64), 1)
+    owner = np.repeat(np.arange(seg.shape[0]), counts)
+    t = (np.arange(int(counts.sum())) - (np.cumsum(counts) - counts)[owner]) / counts[owner]
+    return np.vstack([xy[:-1][owner] + seg[owner] * t[:, None], xy[-1:]])
+
+
+def side_deviation(pred: np.ndarray, reference: np.ndarray, car_xy: np.ndarray,
+                   closed: bool = False, n_true: int = 2) -> float:
+    """One side's geometric deviation (m): the largest distance of ``kept_part(pred)``'s
+    samples to ``reference``; inf when the side has under two cones or starts more than 20 m
+    from the car while its truth has ``n_true`` >= 2 cones (DESIGN.md steps 2-4)."""
     pred = np.asarray(pred, dtype=np.float64).reshape(-1, 2)
     car_xy = np.asarray(car_xy, dtype=np.float64)
-    if pred.shape[0] == 0:
-        return 0.0
+    if n_true >= 2 and (pred.shape[0] < 2
+                        or np.hypot(*(pred[0] - car_xy)) > CRITICAL_DISTANCE_M):
+        return math.inf
+    if pred.shape[0] == 0 or reference.shape[0] == 0:
+        return 0.0  # nothing predicted, or no truth to measure against: not measured
     if closed and pred.shape[0] > 2:
         pred = np.vstack([pred, pred[:1]])
-    exit_ = _first_exit(pred, car_xy, radius_m)
-    if exit_ is not None:  # the walk stops where it first leaves the circle
-        i, t = exit_
-        pred = np.vstack([pred[: i + 1], pred[i] + t * (pred[i + 1] - pred[i])])
-    a, b = pred[:-1], pred[1:]
-    seg = np.hypot(*(b - a).T)
-    # Only segments that can reach within radius_m of the car: their nearer end is within
-    # radius_m plus their own length.
-    da = np.hypot(*(a - car_xy).T)
-    keep = da <= radius_m + seg
-    inside = radius_m + 1e-9  # the cut point lies on the circle, up to rounding
-    pts = [pred[np.hypot(*(pred - car_xy).T) <= inside]]
-    if keep.any():
-        counts = np.maximum(np.ceil(seg[keep] / step_m).astype(np.int64), 1)
-        owner = np.repeat(np.arange(int(keep.sum())), counts)
-        first = np.cumsum(counts) - counts
-        t = (np.arange(int(counts.sum())) - first[owner] + 0.5) / counts[owner]
-        mids = a[keep][owner] + (b[keep] - a[keep])[owner] * t[:, None]
-        pts.append(mids[np.hypot(*(mids - car_xy).T) <= inside])
-        # Where the kept segments cross the circle, so that the cut is sampled exactly.
-        ok, t1, t2 = _circle_roots(a[keep] - car_xy, (b - a)[keep], radius_m)
-        for t in (t1, t2):
-            hit = ok & (t >= 0.0) & (t <= 1.0)
-            pts.append(a[keep][hit] + (b - a)[keep][hit] * t[hit, None])
-    pts = np.vstack(pts)
-    if pts.shape[0] == 0:
-        return 0.0
-    if np.asarray(line).shape[0] == 0:
+    samples = densify(kept_part(pred, car_xy))
+    return float(geo.point_polyline_distance(samples, reference).max())
+
+
+def geometric_deviation(frame: Frame, left: np.ndarray, right: np.ndarray, ok: bool = True,
+                        closed: bool = False) -> float:
+    """The lane's geometric deviation (m), the larger side's ``side_deviation``; inf when no
+    lane is found. Critical at d metres when it exceeds d (``GEOMETRIC_DISTANCES_M``)."""
+    if not ok:
         return math.inf
-    return float(geo.point_polyline_distance(pts, line).max())
+    return max(side_deviation(frame.cones[np.asarray(pred, dtype=np.int64)],
+                              reference_line(frame, side), frame.pose.xy, closed, gt.size)
+               for pred, side, gt in ((left, "left", frame.gt_left),
+                                      (right, "right", frame.gt_right)))
 
 
 def circle_crossing(line: np.ndarray, center: np.ndarray, radius_m: float) -> np.ndarray | None:

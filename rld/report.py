@@ -8,7 +8,8 @@ on the car) and returns the per-pose records; ``write_outputs`` writes
 
 - ``poses.jsonl``: one JSON object per scored pose,
 - ``summary.json``: the protocol's figures per (method, range, rate),
-- ``results.md``: Markdown tables shaped like the CLC paper's Table I,
+- ``results.md``: the headline table (the geometric rule beside the lane's length), then
+  Markdown tables shaped like the CLC paper's Table I (the index rule),
 - ``categories.png``, ``iou.png``, ``latency_cdf.png``: the pictures.
 """
 
@@ -25,13 +26,13 @@ from pathlib import Path
 
 import numpy as np
 
-from rld.evaluation import PoseRecord, lap_interval, run_protocol, summarize
-from rld.metrics import CATEGORIES
+from rld.evaluation import PoseRecord, geometric_key, lap_interval, run_protocol, summarize
+from rld.metrics import CATEGORIES, GEOMETRIC_DISTANCES_M
 from rld.tracks import Track
 from rld.types import LaneParams
 
-__all__ = ["MethodSpec", "parse_method", "evaluate", "summaries", "table_markdown",
-           "stability_markdown", "seeds_markdown",
+__all__ = ["MethodSpec", "parse_method", "evaluate", "summaries", "headline_markdown",
+           "table_markdown", "stability_markdown", "seeds_markdown",
            "write_outputs", "plot_summaries"]
 
 
@@ -132,9 +133,10 @@ def evaluate(tracks: Sequence[Track], specs: Sequence[MethodSpec], ranges=(30.0,
 
 def summaries(records: Iterable[PoseRecord]) -> list[dict]:
     """``summarize`` per (method, range, rate), in first-seen order, over every seed's poses;
-    ``seeds`` lists the seeds (sorted), and ``critical_by_seed`` / ``critical_tolerant_by_seed``
-    each seed's critical rates in that order (%), ``critical_tolerant_interval`` the 95 %
-    interval of the pooled tolerant rate, whole tracks and laps resampled (``lap_interval``)."""
+    ``seeds`` lists the seeds (sorted), and ``<key>_by_seed`` each seed's rate in that order
+    (%) and ``<key>_interval`` the 95 % interval of the pooled rate, whole tracks and laps
+    resampled (``lap_interval``), for the geometric keys and ``critical_tolerant``;
+    ``critical_by_seed`` the strict index rule's."""
     groups: dict[tuple, list[PoseRecord]] = {}
     for r in records:
         groups.setdefault((r.method, r.range_m, r.fp_rate), []).append(r)
@@ -144,45 +146,77 @@ def summaries(records: Iterable[PoseRecord]) -> list[dict]:
         pooled = summarize(recs)
         per = ([pooled] if len(seeds) == 1 else
                [summarize([r for r in recs if r.seed == sd]) for sd in seeds])
-        rows.append({"method": m, "range_m": rng, "fp_rate": fp, **pooled,
-                     "seeds": seeds, "critical_by_seed": [p["critical"] for p in per],
-                     "critical_tolerant_by_seed": [p["critical_tolerant"] for p in per],
-                     "critical_tolerant_interval": list(lap_interval(recs))})
+        row = {"method": m, "range_m": rng, "fp_rate": fp, **pooled,
+               "seeds": seeds, "critical_by_seed": [p["critical"] for p in per],
+               "critical_tolerant_by_seed": [p["critical_tolerant"] for p in per],
+               "critical_tolerant_interval": list(lap_interval(recs))}
+        for d in GEOMETRIC_DISTANCES_M:
+            key = geometric_key(d)
+            row[f"{key}_by_seed"] = [p[key] for p in per]
+            row[f"{key}_interval"] = ([math.nan, math.nan] if math.isnan(pooled[key])
+                                      else list(lap_interval(recs, geometric_m=d)))
+        rows.append(row)
     return rows
 
 
+def _pct(v) -> str:
+    return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.2f}"
+
+
+def headline_markdown(rows: list[dict]) -> str:
+    """The headline: geometric critical % at each ``GEOMETRIC_DISTANCES_M`` (DESIGN.md
+    "Geometric critical"), beside the mean predicted / true length, the too-short share and
+    IoU20, and the steady latency (first calls apart, as start-up)."""
+    dists = " | ".join(f"geometric critical > {d:g} m %" for d in GEOMETRIC_DISTANCES_M)
+    parts = [f"| method | R (m) | FP | poses | {dists} | pred / true length (m, %) | "
+             "too short % | IoU20 % | median / p95 / max latency (ms) | start-up (ms) |",
+             "|" + "---|" * (9 + len(GEOMETRIC_DISTANCES_M))]
+    for r in rows:
+        geo = " | ".join(_pct(r.get(geometric_key(d))) for d in GEOMETRIC_DISTANCES_M)
+        start = r.get("startup_median_ms", math.nan)
+        start = "-" if start is None or math.isnan(start) else f"{start:.0f}"
+        ratio = r.get("length_ratio", math.nan)
+        ratio = "-" if ratio is None or math.isnan(ratio) else f"{ratio:.0f}"
+        parts.append(
+            f"| {r['method']} | {r['range_m']:g} | {r['fp_rate']:.0%} | {r['poses']} | {geo} | "
+            f"{r['pred_length_m']:.0f} / {r['true_length_m']:.0f} "
+            f"({ratio}) | {_pct(r.get('short'))} | "
+            f"{r['mean_iou20']:.1f} | {r['latency_median_ms']:.1f} / "
+            f"{r['latency_p95_ms']:.1f} / {r['latency_max_ms']:.1f} | {start} |")
+    return "\n".join(parts) + "\n"
+
+
 def seeds_markdown(rows: list[dict]) -> str:
-    """Each seed's critical rates per method, range and false-positive rate, and their spread:
-    one seed's false positives are a few persistent configurations, each seen from many poses
-    in a row, so a single seed's rate moves by whole points from seed to seed. The last column
-    is the pooled tolerant rate with its 95 % interval, tracks and laps resampled
-    (``lap_interval``), then the pooled rate of those critical poses whose lane is more than 1 m
-    off the true lines within 20 m (``summarize``'s ``critical_off``). Empty when every row
-    has one seed."""
+    """Each seed's geometric critical rates per method, range and false-positive rate, and the
+    pooled rates with their 95 % intervals, tracks and laps resampled (``lap_interval``): one
+    seed's false positives are a few persistent configurations, each seen from many poses in a
+    row, so a single seed's rate moves by whole points. The index rule's tolerant rate last.
+    Empty when every row has one seed."""
     if all(len(r.get("seeds", [])) < 2 for r in rows):
         return ""
-    parts = ["| method | R (m) | FP | seeds | critical % per seed | tolerant % per seed | "
-             "tolerant: all seeds (min - max) | "
-             "tolerant: 95 % interval (tracks, laps resampled) | "
-             "tolerant and > 1 m off the true lines within 20 m (%) |",
-             "|" + "---|" * 9]
+    keys = [geometric_key(d) for d in GEOMETRIC_DISTANCES_M]
+    names = [f"> {d:g} m" for d in GEOMETRIC_DISTANCES_M]
+    parts = ["| method | R (m) | FP | seeds | "
+             + " | ".join(f"geometric {n} % per seed" for n in names) + " | "
+             + " | ".join(f"geometric {n} %, all seeds (95 % interval)" for n in names)
+             + " | index rule, tolerant %, all seeds (95 % interval) |",
+             "|" + "---|" * (5 + 2 * len(keys))]
     for r in rows:
-        strict = " / ".join(f"{v:.2f}" for v in r["critical_by_seed"])
-        tol = r["critical_tolerant_by_seed"]
+        per = " | ".join(" / ".join(_pct(v) for v in r.get(f"{k}_by_seed", [])) for k in keys)
+        pooled = " | ".join(
+            f"{_pct(r.get(k))} ({_pct(r.get(f'{k}_interval', [math.nan] * 2)[0])} - "
+            f"{_pct(r.get(f'{k}_interval', [math.nan] * 2)[1])})" for k in keys)
         lo, hi = r["critical_tolerant_interval"]
         parts.append(f"| {r['method']} | {r['range_m']:g} | {r['fp_rate']:.0%} | "
-                     f"{', '.join(str(v) for v in r['seeds'])} | {strict} | "
-                     f"{' / '.join(f'{v:.2f}' for v in tol)} | {r['critical_tolerant']:.2f} "
-                     f"({min(tol):.2f} - {max(tol):.2f}) | {lo:.2f} - {hi:.2f} | "
-                     f"{r.get('critical_off', math.nan):.2f} |")
+                     f"{', '.join(str(v) for v in r['seeds'])} | {per} | {pooled} | "
+                     f"{r['critical_tolerant']:.2f} ({lo:.2f} - {hi:.2f}) |")
     return "\n".join(parts) + "\n"
 
 
 def table_markdown(rows: list[dict]) -> str:
-    """One table per (method, range), rows per false-positive rate, columns as the CLC paper's
-    Table I plus the tolerant critical rate, the poses of it whose lane is more than 1 m off
-    the true lines within 20 m (``summarize``'s ``critical_off``; "-" for records that
-    predate it), IoU20, lengths and latency."""
+    """The index rule, paper-compatible: one table per (method, range), rows per false-positive
+    rate, columns as the CLC paper's Table I plus the tolerant critical rate, IoU20, lengths
+    and latency."""
     parts = []
     keys = []
     for row in rows:
@@ -192,20 +226,17 @@ def table_markdown(rows: list[dict]) -> str:
         parts.append(f"**{method}, R = {rng:g} m**\n")
         parts.append("| FP | poses | GT % | near-GT % | too short % | diverging >= 20 m % | "
                      "diverging < 20 m % | failed % | success % | critical % (tolerant) | "
-                     "critical, > 1 m off % | "
                      "mean IoU % | IoU20 % | pred / true length (m) | median / p95 latency (ms) |")
-        parts.append("|" + "---|" * 15)
+        parts.append("|" + "---|" * 14)
         for r in rows:
             if (r["method"], r["range_m"]) != (method, rng):
                 continue
             success = r["gt"] + r["near_gt"] + r["too_short"] + r["diverging_ge20"]
-            off = r.get("critical_off", math.nan)
-            off = "-" if math.isnan(off) else f"{off:.1f}"
             parts.append(
                 f"| {r['fp_rate']:.0%} | {r['poses']} | {r['gt']:.1f} | {r['near_gt']:.1f} | "
                 f"{r['too_short']:.1f} | {r['diverging_ge20']:.1f} | {r['diverging_lt20']:.1f} "
                 f"| {r['failed']:.1f} | {success:.1f} | {r['critical']:.1f} "
-                f"({r['critical_tolerant']:.1f}) | {off} | {r['mean_iou']:.1f} | "
+                f"({r['critical_tolerant']:.1f}) | {r['mean_iou']:.1f} | "
                 f"{r['mean_iou20']:.1f} "
                 f"| {r['pred_length_m']:.0f} / {r['true_length_m']:.0f} | "
                 f"{r['latency_median_ms']:.1f} / {r['latency_p95_ms']:.1f} |")
@@ -269,9 +300,14 @@ def plot_summaries(rows: list[dict], records: list[PoseRecord], folder: Path) ->
         sub = [r for r in rows if (r["method"], r["range_m"]) == (m, rng)]
         fp = [100 * r["fp_rate"] for r in sub]
         ax[0].plot(fp, [r["mean_iou"] for r in sub], "o-", label=f"{m}, {rng:g} m")
-        ax[1].plot(fp, [r["critical"] for r in sub], "o-", label=f"{m}, {rng:g} m")
+        line = None
+        for d, style in zip(GEOMETRIC_DISTANCES_M, ("o-", "s--"), strict=False):
+            kw = {"color": line.get_color()} if line is not None else {}
+            (ln,) = ax[1].plot(fp, [r.get(geometric_key(d), math.nan) for r in sub], style,
+                               label=f"{m}, {rng:g} m, > {d:g} m", **kw)
+            line = line or ln
     ax[0].set_ylabel("mean IoU %")
-    ax[1].set_ylabel("critical failures % (strict)")
+    ax[1].set_ylabel("geometric critical % (boundary off by more than d)")
     for a in ax:
         a.set_xlabel("false positives %")
         a.grid(alpha=0.3)
@@ -339,7 +375,9 @@ def write_outputs(records: list[PoseRecord], folder: str | Path, header: str = "
     (folder / "summary.json").write_text(
         json.dumps([{k: _clean(v) for k, v in r.items()} for r in rows], indent=1) + "\n")
     spread = seeds_markdown(rows)
-    md = ((header + "\n\n" if header else "") + table_markdown(rows)
+    md = ((header + "\n\n" if header else "") + "**Headline: the geometric rule**\n\n"
+          + headline_markdown(rows) + "\n**Index rule (paper-compatible)**\n\n"
+          + table_markdown(rows)
           + ("\n**Seeds**\n\n" + spread if spread else "")
           + "\n**Stability** (Huang et al. eq. 5)\n\n" + stability_markdown(rows))
     (folder / "results.md").write_text(md)
@@ -390,13 +428,21 @@ def results_page(rows: list[dict], header: str, images: Sequence[str] = ()) -> s
         "# Results on the shared tracks",
         "",
         "Generated by `rld eval` (do not edit by hand). The protocol and metrics are those of",
-        "DESIGN.md (docs/protocol.md); critical = diverging below 20 m or no lane.",
+        "DESIGN.md (docs/protocol.md). Headline: geometric critical = a predicted boundary more",
+        "than 1 m (or 0.5 m) off the true one within 20 m of the car, a side missing or starting",
+        "beyond 20 m, or no lane; read it beside the lane's length. The index rule (critical =",
+        "diverging from the true cone order below 20 m, or no lane) is the paper-compatible table.",
         "",
         header,
         "",
         "## Ours",
         "",
         *[f"![{Path(i).stem}]({i})" for i in images],
+        "",
+        "### Headline: the geometric rule",
+        "",
+        headline_markdown(rows),
+        "### Index rule (paper-compatible, CLC Table I)",
         "",
         table_markdown(rows),
         *(["## Seeds", "",

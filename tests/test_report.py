@@ -18,10 +18,10 @@ from rld.generator import generate_track
 from rld.report import (
     MethodSpec,
     evaluate,
+    headline_markdown,
     parse_method,
     seeds_markdown,
     summaries,
-    table_markdown,
     write_outputs,
 )
 
@@ -163,7 +163,7 @@ def test_failure_pictures_of_several_seeds_do_not_overwrite_each_other(tmp_path)
     for sd in (0, 5):
         recs = run_protocol([track], method="nearest", range_m=30.0, fp_rate=0.3, every=20,
                             seed=sd, plot_failures=str(folder))
-        crit += sum(r.category in ("diverging_lt20", "failed") for r in recs)
+        crit += sum(r.deviation_m > 0.5 for r in recs)  # geometric critical at 0.5 m
     assert crit > 0  # the nearest-cone baseline fails here; else the test proves nothing
     pictures = list(folder.iterdir())
     assert len(pictures) == crit
@@ -222,36 +222,65 @@ def test_seed_table_gives_the_lap_interval():
     recs = _lap("a", 0, 10, 2) + _lap("b", 0, 10, 6) + _lap("a", 1, 10, 2) + _lap("b", 1, 10, 6)
     (row,) = summaries(recs)
     assert row["critical_tolerant_interval"] == list(lap_interval(recs))
-    assert "| 40.00 (40.00 - 40.00) | 20.00 - 60.00 |" in seeds_markdown([row])
+    assert seeds_markdown([row]).rstrip().endswith("| 40.00 (20.00 - 60.00) |")
 
 
-def test_critical_off_counts_critical_lanes_more_than_a_metre_off():
-    # Ten poses: tolerant-critical ones 0.6 m (a cone out of order, near the line), 1.5 m and
-    # inf (no lane) off; a non-critical one 2 m off (beyond 20 m of arc, say) does not count.
-    recs = [dataclasses.replace(r, deviation20_m=d)
-            for r, d in zip(_lap("a", 0, 10, 3), (0.6, 1.5, math.inf, 2.0) + (0.0,) * 6,
-                            strict=True)]
+def _geo(recs, devs):
+    return [dataclasses.replace(r, deviation_m=d) for r, d in zip(recs, devs, strict=True)]
+
+
+def test_geometric_rates_by_hand():
+    # Ten poses 0.3, 0.7, 1.5 m and inf (no lane) off, six on the line: critical at 0.5 m
+    # 3 of 10, at 1 m 2 of 10, whatever the index rule says (here 3 tolerant-critical poses).
+    recs = _geo(_lap("a", 0, 10, 3), (0.3, 0.7, 1.5, math.inf) + (0.0,) * 6)
     out = summarize(recs)
+    assert out["geo_critical_1m"] == pytest.approx(20.0)
+    assert out["geo_critical_0.5m"] == pytest.approx(30.0)
     assert out["critical_tolerant"] == pytest.approx(30.0)
-    assert out["critical_off"] == pytest.approx(20.0)
-    # Pooled with a clean lap of the next seed: 2 of 20 poses.
-    clean = [dataclasses.replace(r, deviation20_m=0.0) for r in _lap("a", 1, 10, 0)]
+    # Pooled with a clean lap of the next seed: 2 and 3 of 20; each seed's rate and the
+    # pooled one with its lap interval (two laps of one track: 0 % or 20 / 30 %, each drawn).
+    clean = _geo(_lap("a", 1, 10, 0), (0.0,) * 10)
     (row,) = summaries(recs + clean)
-    assert row["critical_off"] == pytest.approx(10.0)
-    assert seeds_markdown([row]).rstrip().endswith("| 10.00 |")
-    # Records written before the deviation (NaN) make the rate NaN, not a silent 0.
-    assert math.isnan(summarize(_lap("a", 0, 10, 3))["critical_off"])
-    # The main table: the tolerant rate, then the share of poses more than 1 m off.
-    assert "| 15.0 (15.0) | 10.0 | 100.0 |" in table_markdown([row])
-    assert "| 30.0 (30.0) | - | 100.0 |" in table_markdown(summaries(_lap("a", 0, 10, 3)))
+    assert row["geo_critical_1m_by_seed"] == [20.0, 0.0]
+    assert row["geo_critical_0.5m"] == pytest.approx(15.0)
+    assert row["geo_critical_1m_interval"] == list(lap_interval(recs + clean, geometric_m=1.0))
+    lo, hi = row["geo_critical_0.5m_interval"]
+    assert lo == pytest.approx(0.0) and hi == pytest.approx(30.0)
+    md = seeds_markdown([row])
+    assert "| 20.00 / 0.00 | 30.00 / 0.00 | 10.00 (0.00 - 20.00) | 15.00 (0.00 - 30.00) |" in md
+    # Records written before the rule (NaN) make the rate NaN, not a silent 0.
+    assert math.isnan(summarize(_lap("a", 0, 10, 3))["geo_critical_1m"])
+    assert "| - | - |" in headline_markdown(summaries(_lap("a", 0, 10, 3)))
 
 
-def test_protocol_records_the_deviation():
+def test_headline_table_by_hand():
+    # Lengths: predicted 1 m (from _lap) of 4 m true: 25 %; two of ten poses too short; the
+    # first call is start-up (250 ms), the others' latency 1 ms.
+    recs = _geo(_lap("a", 0, 10, 0), (0.7,) + (0.0,) * 9)
+    recs = [dataclasses.replace(r, true_length_m=4.0, too_short=k < 2, first_call=k == 0,
+                                latency_s=0.25 if k == 0 else 0.001)
+            for k, r in enumerate(recs)]
+    (row,) = summaries(recs)
+    assert row["length_ratio"] == pytest.approx(25.0)
+    assert row["short"] == pytest.approx(20.0)
+    assert row["startup_calls"] == 1 and row["startup_median_ms"] == pytest.approx(250.0)
+    assert row["latency_max_ms"] == pytest.approx(1.0)  # the first call is not latency
+    line = headline_markdown([row]).splitlines()[2]
+    assert line == ("| m | 30 | 30% | 10 | 0.00 | 10.00 | 1 / 4 (25) | 20.00 | 100.0 | "
+                    "1.0 / 1.0 / 1.0 | 250 |")
+
+
+def test_protocol_records_the_geometric_rule():
     recs = run_protocol([generate_track(3)], method="nearest", range_m=30.0, fp_rate=0.3,
                         every=25)
-    dev = np.array([r.deviation20_m for r in recs])
-    crit = np.array([r.category_tolerant in ("failed", "diverging_lt20") for r in recs])
+    dev = np.array([r.deviation_m for r in recs])
     assert not np.isnan(dev).any() and (dev >= 0).all()
     assert (dev[[r.category == "failed" for r in recs]] == math.inf).all()
-    want = 100.0 * np.sum(crit & (dev > 1.0)) / len(recs)
-    assert summarize(recs)["critical_off"] == pytest.approx(want)
+    out = summarize(recs)
+    for d in (1.0, 0.5):
+        assert out[f"geo_critical_{d:g}m"] == pytest.approx(100.0 * np.mean(dev > d))
+    # Stateless: only the run's first call is start-up.
+    assert [r.first_call for r in recs] == [True] + [False] * (len(recs) - 1)
+    stateful = run_protocol([generate_track(3)], method="nearest", range_m=30.0, every=100,
+                            stateful=True)
+    assert stateful[0].first_call and not any(r.first_call for r in stateful[1:])
