@@ -10,10 +10,13 @@ from __future__ import annotations
 import enum
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field, fields, replace
-from typing import Any
+from dataclasses import dataclass, field, fields, is_dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from rld.path import LanePath
 
 __all__ = [
     "Pose",
@@ -415,6 +418,29 @@ class LaneStatus(enum.Enum):
 _EMPTY = np.zeros(0, dtype=np.int64)
 
 
+def _plain(value: Any) -> Any:
+    """``value`` as plain JSON types, for ``Lane.to_dict``'s stats: numpy scalars and arrays to
+    numbers and lists, mappings to dicts with str keys, dataclasses to dicts of their fields,
+    enums to their names, non-finite floats to None, anything else to its ``repr``."""
+    if value is None or isinstance(value, bool | str | int):
+        return value
+    if isinstance(value, float | np.floating):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, np.bool_ | np.integer):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist())
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple | set | frozenset):
+        return [_plain(v) for v in value]
+    if isinstance(value, enum.Enum):
+        return value.name
+    if is_dataclass(value) and not isinstance(value, type):
+        return {f.name: _plain(getattr(value, f.name)) for f in fields(value)}
+    return repr(value)
+
+
 @dataclass(frozen=True, eq=False)
 class Lane:
     """The driving lane found in ``cones``: two ordered index sequences, from the car forward.
@@ -497,6 +523,52 @@ class Lane:
         from rld.geometry import lane_polygon
 
         return lane_polygon(self.left_xy, self.right_xy, closed=self.closed)
+
+    def path(self, spacing_m: float = 0.5) -> LanePath:
+        """The centreline every ``spacing_m`` m with heading, curvature and widths
+        (``rld.path.lane_path``); an empty ``LanePath`` when no lane was found."""
+        from rld.path import LanePath, check_spacing, lane_path
+
+        if not self.ok:
+            check_spacing(spacing_m)
+            return LanePath(closed=self.closed)
+        return lane_path(self.left_xy, self.right_xy, self.closed, spacing_m)
+
+    def to_dict(self) -> dict:
+        """The lane as plain JSON types: cones, left, right, status (its name), message, cost
+        (None for NaN), closed and stats (numpy values made plain); ``from_dict`` inverts it."""
+        return {
+            "cones": self.cones.tolist(), "left": self.left.tolist(),
+            "right": self.right.tolist(), "status": self.status.name, "message": self.message,
+            "cost": float(self.cost) if math.isfinite(self.cost) else None,
+            "closed": bool(self.closed), "stats": _plain(self.stats),
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Lane:
+        """The ``Lane`` of a ``to_dict`` result (also after a JSON round trip); ValueError for a
+        missing key or an unknown status."""
+        missing = [k for k in ("cones", "left", "right", "status") if k not in d]
+        if missing:
+            raise ValueError(f"a lane dict needs the keys {missing}")
+        try:
+            status = LaneStatus[d["status"]]
+        except KeyError as exc:
+            raise ValueError(f"unknown lane status {d['status']!r}") from exc
+        cost = d.get("cost")
+        return cls(
+            cones=np.array(d["cones"], dtype=np.float64).reshape(-1, 2),
+            left=np.array(d["left"], dtype=np.int64), right=np.array(d["right"], dtype=np.int64),
+            status=status, message=str(d.get("message", "")),
+            cost=math.nan if cost is None else float(cost), closed=bool(d.get("closed", False)),
+            stats=dict(d.get("stats") or {}),
+        )
+
+    def to_json(self, **kwargs) -> str:
+        """``json.dumps`` of ``to_dict`` (strict JSON: no NaN); keyword arguments pass on."""
+        import json
+
+        return json.dumps(self.to_dict(), allow_nan=False, **kwargs)
 
     def __repr__(self) -> str:
         return (
