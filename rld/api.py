@@ -1,6 +1,8 @@
 """The public entry points: ``solve_lane`` (stateless) and ``LaneSolver`` (reusable).
 
-Input is validated here, once; the methods behind receive clean arrays. A method is looked up
+Input is validated here, once; the methods behind receive clean arrays, with duplicate cones
+merged (``rld.dedup``), and a lane they return with fewer than two cones on a side becomes
+``NOT_FOUND`` here, for every method (``LaneSolver.solve``). A method is looked up
 by name in ``METHODS``; a name that does not exist is a ``ValueError``, never a stand-in lane.
 ``rld.api`` reaches ``clc`` lazily, when a CLC solver is made, so ``clc`` may import the core.
 """
@@ -9,14 +11,17 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
 from rld.baselines import nearest_chain
-from rld.types import Lane, LaneParams, Pose, as_cones, as_pose
+from rld.dedup import merge_duplicates
+from rld.types import MIN_CONES, Lane, LaneParams, Pose, as_cones, as_pose
 
-__all__ = ["solve_lane", "LaneSolver", "METHODS", "DEFAULT_METHOD", "COLOR_CODES"]
+__all__ = ["solve_lane", "LaneSolver", "METHODS", "DEFAULT_METHOD", "COLOR_CODES",
+           "MIN_SIDE_CONES"]
 
 
 class _NearestMethod:
@@ -131,6 +136,9 @@ METHODS: dict[str, Callable[..., Any]] = {
 DEFAULT_METHOD = "rld"
 #: Per-cone colour labels accepted in ``colors``.
 COLOR_CODES = {"unknown": 0, "left": 1, "right": 2}
+#: Fewest cones a side of a lane that ``LaneSolver.solve`` returns (issue 42): a boundary is
+#: at least one edge. A method's lane with a shorter side becomes ``NOT_FOUND``.
+MIN_SIDE_CONES = 2
 
 
 def _check_method(method: str) -> str:
@@ -226,7 +234,17 @@ class LaneSolver:
     ) -> Lane:
         """Find the lane in ``cones`` ((N, 2) metres) ahead of ``pose`` ((x, y, yaw) or a
         ``Pose``). Raises ``ValueError`` on invalid input; returns a ``Lane`` with ``ok ==
-        False`` when the input is valid but holds no lane."""
+        False`` when the input is valid but holds no lane.
+
+        Two rules hold for every method (issue 42). Duplicates: cones at most
+        ``params.duplicate_radius_m`` (0.3 m) apart are merged before the method runs
+        (``rld.dedup.merge_duplicates``: each group is its lowest-index cone, a known colour
+        beats unknown, the largest confidence counts); the lane is mapped back, so its
+        ``cones`` are the caller's (validated) and its indices point into them, and
+        ``stats["duplicates_merged"]`` counts the cones merged away. Sides: a lane with fewer
+        than ``MIN_SIDE_CONES`` (2) cones on a side is returned as ``NOT_FOUND``, its message
+        naming the side and its count, the method's stats kept (``stats["short_lane"]``: the
+        method's status, message and side counts)."""
         points = as_cones(cones)
         car = as_pose(pose)
         labels = _check_colors(colors, points.shape[0])
@@ -234,17 +252,55 @@ class LaneSolver:
         if time_limit_s is not None and not (time_limit_s > 0):
             raise ValueError(f"time_limit_s must be positive, got {time_limit_s}")
         t0 = time.perf_counter()
-        lane = self._impl.solve(points, car, colors=labels, time_limit_s=time_limit_s,
-                                confidence=conf)
+        radius = self.params.duplicate_radius_m
+        if radius > 0:
+            merged, keep, m_labels, m_conf = merge_duplicates(points, radius, colors=labels,
+                                                              confidence=conf)
+        else:  # merging off
+            merged, keep, m_labels, m_conf = points, None, labels, conf
+        n_merged = int(points.shape[0] - merged.shape[0])
+        if n_merged == 0:  # the method sees the caller's cones themselves
+            merged, m_labels, m_conf = points, labels, conf
+        if merged.shape[0] < MIN_CONES:
+            lane = Lane.not_found(
+                points, f"only {merged.shape[0]} distinct cones once those within "
+                f"{radius:g} m of each other are merged; a lane needs {MIN_CONES}")
+        else:
+            lane = _at_least_two_a_side(
+                self._impl.solve(merged, car, colors=m_labels, time_limit_s=time_limit_s,
+                                 confidence=m_conf), merged)
+            if n_merged:
+                # Back to the caller's indices (the lowest of each group) and cones.
+                lane = replace(lane, cones=points, left=keep[lane.left], right=keep[lane.right])
         elapsed = time.perf_counter() - t0
         lane.stats.setdefault("backend", self.backend)
-        lane.stats.update(method=self.method, solve_time_s=elapsed, n_cones=int(points.shape[0]))
-        lane.stats.setdefault("n_cones_used", int(points.shape[0]))
+        lane.stats.update(method=self.method, solve_time_s=elapsed, n_cones=int(points.shape[0]),
+                          duplicates_merged=n_merged)
+        lane.stats.setdefault("n_cones_used", int(merged.shape[0]))
         if self.tracker is not None:
             lane.stats["tracked"] = self.tracker.update(
                 lane.centerline if lane.ok else None, car.xy, car.heading)
         self.previous = lane
         return lane
+
+
+def _at_least_two_a_side(lane: Lane, points: np.ndarray) -> Lane:
+    """``lane`` itself, or ``NOT_FOUND`` when it is a lane with a side of fewer than
+    ``MIN_SIDE_CONES`` cones. Only the returned value changes: the method's own state (a
+    warm start, ``rld-incremental``'s kept lane) is not touched; see docs/api.md."""
+    if not lane.ok:
+        return lane
+    short = [(name, int(side.size)) for name, side in (("left", lane.left), ("right", lane.right))
+             if side.size < MIN_SIDE_CONES]
+    if not short:
+        return lane
+    why = " and ".join(f"the {name} side has {k} cone{'' if k == 1 else 's'}"
+                       for name, k in short)
+    stats = dict(lane.stats)
+    stats["short_lane"] = {"status": lane.status.name, "message": lane.message,
+                           "left": int(lane.left.size), "right": int(lane.right.size)}
+    return Lane.not_found(points, f"{why}; a lane needs at least {MIN_SIDE_CONES} cones a side",
+                          stats=stats)
 
 
 def solve_lane(
@@ -268,7 +324,8 @@ def solve_lane(
     confidence in [0, 1], a cost for RLD (``LaneParams.w_confidence``). The nearest-neighbour
     baseline ignores both. ``time_limit_s``: the solve's time budget (RLD default 0.4 s; CLC is
     bounded by ``params.max_iterations`` instead). ``ranker``: the CLC ranker (default
-    ``learned``).
+    ``learned``). Duplicate cones are merged first and a lane has two cones a side at least,
+    whatever the method (``LaneSolver.solve``).
     """
     return LaneSolver(method=method, params=params, backend=backend, ranker=ranker).solve(
         cones, pose, colors=colors, time_limit_s=time_limit_s, confidence=confidence

@@ -122,7 +122,7 @@ def as_cones(cones: Any, min_cones: int = MIN_CONES) -> np.ndarray:
 #: LaneParams fields for which 0 is meaningful.
 _MAY_BE_ZERO = ("window_behind_m", "nvd_distance_weight", "nvd_lookahead_weight",
                 "contested_margin", "skipped_cone_m", "start_min_width_m", "start_behind_m",
-                "start_lookback_m",
+                "start_lookback_m", "duplicate_radius_m",
                 "w_regularity", "w_width_roughness", "w_turn_roughness")
 
 
@@ -337,6 +337,9 @@ class LaneParams:
     car")."""
     max_cones: int = 20
     """How many map cones, nearest ahead of the car, RLD's program takes."""
+    duplicate_radius_m: float = 0.3
+    """Cones at most this far apart (m, centre to centre) are one cone, merged before any method
+    runs (``rld.dedup``); a small cone's base is 0.228 m wide (rules). 0 turns merging off."""
     window_behind_m: float = 2.0
     """How far behind the car (along its heading) a cone may lie and still enter RLD's window,
     metres; the cones beside the car must stay in for the lane to start there. Measured on the
