@@ -5,6 +5,11 @@
 - Our CSV: one cone a row, ``id,x,y,side,order``; ``side`` is ``left``, ``right`` or empty and
   ``order`` the cone's position on its boundary. A first line ``# closed=1`` marks a closed
   track. A CSV with only ``x,y`` columns (no header names needed beyond them) is a bare map.
+  An optional ``color`` (or ``colour``) column holds each cone's colour label as written
+  (``Track.meta["colors"]``, lower-cased, an empty cell ``unknown``).
+
+The readers raise ``ValueError`` naming the file (and the line or cone) for a file that is not
+in its format.
 """
 
 from __future__ import annotations
@@ -144,21 +149,84 @@ def load_dataset_track(folder: str | Path, number: int) -> Track:
     """Load track ``number`` of the FSD racetrack dataset in ``folder`` (``cone_map_K.yaml`` and
     ``boundaries_K.yaml``). Every dataset track is closed."""
     folder = Path(folder)
-    with open(folder / f"cone_map_{number}.yaml") as fh:
-        cone_map = yaml.safe_load(fh)
-    with open(folder / f"boundaries_{number}.yaml") as fh:
-        bounds = yaml.safe_load(fh)
-    if not isinstance(cone_map, dict) or not all(k in bounds for k in ("left", "right")):
-        raise ValueError(f"{folder}: not in the racetrack dataset format")
-    ids = np.array(sorted(int(k) for k in cone_map), dtype=np.int64)
-    cones = np.array([cone_map[int(i)] for i in ids], dtype=np.float64).reshape(-1, 2)
+    map_path = folder / f"cone_map_{number}.yaml"
+    bounds_path = folder / f"boundaries_{number}.yaml"
+    ids, cones = _cone_map(map_path, _read_yaml(map_path))
+    bounds = _read_yaml(bounds_path)
+    if not isinstance(bounds, dict) or not all(
+        isinstance(bounds.get(k), list) for k in ("left", "right")
+    ):
+        raise ValueError(f"{bounds_path}: expected lists 'left' and 'right' of cone ids")
     index = {int(i): k for k, i in enumerate(ids)}
+    sides = []
+    for side in ("left", "right"):
+        try:
+            sides.append([index[_cone_id(i)] for i in bounds[side]])
+        except KeyError as exc:
+            raise ValueError(f"{bounds_path}: {side} boundary cone {exc} is not in "
+                             f"{map_path.name}") from exc
+        except ValueError as exc:
+            raise ValueError(f"{bounds_path}: {side} boundary: {exc}") from exc
     try:
-        left = [index[int(i)] for i in bounds["left"]]
-        right = [index[int(i)] for i in bounds["right"]]
-    except KeyError as exc:
-        raise ValueError(f"boundary cone {exc} is not in cone_map_{number}.yaml") from exc
-    return Track(cones, ids, left, right, closed=True, name=f"track {number}")
+        return Track(cones, ids, sides[0], sides[1], closed=True, name=f"track {number}")
+    except ValueError as exc:
+        raise ValueError(f"{bounds_path}: {exc}") from exc
+
+
+def _read_yaml(path: Path):
+    """``path``'s YAML; ``ValueError`` naming the file when it is not YAML."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return yaml.safe_load(fh)
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not a text file") from exc
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" (line {mark.line + 1})" if mark is not None else ""
+        problem = getattr(exc, "problem", None) or type(exc).__name__
+        raise ValueError(f"{path}: not valid YAML{where}: {problem}") from exc
+
+
+def _cone_id(key) -> int:
+    """A cone id as written in a file (an integer, or a string of one); ``ValueError``
+    otherwise (booleans and fractions too)."""
+    value = None
+    if isinstance(key, (int, np.integer)) and not isinstance(key, bool):
+        value = int(key)
+    elif isinstance(key, str):
+        try:
+            value = int(key.strip())
+        except ValueError:
+            pass
+    if value is None or not -(2**63) <= value < 2**63:
+        raise ValueError(f"cone id {key!r} is not an integer")
+    return value
+
+
+def _cone_map(path: Path, cone_map) -> tuple[np.ndarray, np.ndarray]:
+    """The ids (sorted) and (N, 2) positions of a dataset-style ``id: [x, y]`` mapping read
+    from ``path``; ``ValueError`` naming the file and the cone for anything else."""
+    if not isinstance(cone_map, dict) or not cone_map:
+        raise ValueError(f"{path}: expected a mapping of cone ids to [x, y] in metres")
+    xy: dict[int, tuple[float, float]] = {}
+    for key, value in cone_map.items():
+        try:
+            cid = _cone_id(key)
+        except ValueError as exc:
+            raise ValueError(f"{path}: {exc}") from exc
+        if cid in xy:
+            raise ValueError(f"{path}: cone id {cid} appears twice")
+        try:
+            x, y = (float(v) for v in value)
+            if isinstance(value, (str, bytes)) or not (np.isfinite(x) and np.isfinite(y)):
+                raise ValueError
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{path}: cone {cid}: expected [x, y] in metres, got "
+                             f"{value!r}") from exc
+        xy[cid] = (x, y)
+    ids = np.array(sorted(xy), dtype=np.int64)
+    cones = np.array([xy[int(i)] for i in ids], dtype=np.float64).reshape(-1, 2)
+    return ids, cones
 
 
 def write_csv(track: Track, path: str | Path) -> None:
@@ -178,44 +246,94 @@ def write_csv(track: Track, path: str | Path) -> None:
 
 
 def read_csv(path: str | Path) -> Track:
-    """Read our CSV format; a bare ``x,y`` CSV gives a track with no boundaries."""
-    text = Path(path).read_text()
+    """Read our CSV format; a bare ``x,y`` CSV gives a track with no boundaries. A ``color``
+    (or ``colour``) column's labels land in ``meta["colors"]`` (see the module docstring)."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not a text file") from exc
     closed = True
     lines = []
-    for line in text.splitlines():
+    numbers = []  # each kept line's number in the file, for the messages
+    for number, line in enumerate(text.splitlines(), start=1):
         if line.startswith("#"):
             if "closed=0" in line.replace(" ", ""):
                 closed = False
             continue
         if line.strip():
             lines.append(line)
+            numbers.append(number)
     if not lines:
         raise ValueError(f"{path}: no rows")
-    rows = list(csv.reader(io.StringIO("\n".join(lines))))
+    try:
+        rows = list(csv.reader(io.StringIO("\n".join(lines))))
+    except csv.Error as exc:
+        raise ValueError(f"{path}: not a CSV file: {exc}") from exc
     header = [h.strip().lower() for h in rows[0]]
     if "x" in header and "y" in header:
-        body = rows[1:]
+        body, numbers = rows[1:], numbers[1:]
     else:
         header, body = ["x", "y"], rows
+    if not body:
+        raise ValueError(f"{path}: no rows")
     col = {h: k for k, h in enumerate(header)}
-    try:
-        cones = np.array([[float(r[col["x"]]), float(r[col["y"]])] for r in body])
-    except (ValueError, IndexError) as exc:
-        raise ValueError(f"{path}: bad x,y value: {exc}") from exc
+    if "colour" in col and "color" not in col:
+        col["color"] = col["colour"]
+
+    def cell(r: list[str], name: str, line: int) -> str:
+        try:
+            return r[col[name]].strip()
+        except IndexError:
+            raise ValueError(f"{path}: line {line}: no {name!r} column "
+                             f"({len(r)} of {len(header)} cells)") from None
+
+    cones = np.empty((len(body), 2))
+    for k, (r, line) in enumerate(zip(body, numbers, strict=True)):
+        for j, name in enumerate(("x", "y")):
+            text_value = cell(r, name, line)
+            try:
+                cones[k, j] = float(text_value)
+            except ValueError:
+                raise ValueError(f"{path}: line {line}: bad x,y value: {name} = "
+                                 f"{text_value!r} is not a number") from None
+            if not np.isfinite(cones[k, j]):
+                raise ValueError(f"{path}: line {line}: bad x,y value: {name} = "
+                                 f"{text_value!r} is not finite")
     n = len(body)
-    ids = (
-        np.array([int(r[col["id"]]) for r in body]) if "id" in col else np.arange(n)
-    )
+    ids = np.arange(n)
+    if "id" in col:
+        for k, (r, line) in enumerate(zip(body, numbers, strict=True)):
+            try:
+                ids[k] = _cone_id(cell(r, "id", line))
+            except ValueError as exc:
+                raise ValueError(f"{path}: line {line}: {exc}") from None
+        seen: dict[int, int] = {}
+        for cid, line in zip(ids.tolist(), numbers, strict=True):
+            if cid in seen:
+                raise ValueError(f"{path}: line {line}: cone id {cid} appears twice (also on "
+                                 f"line {seen[cid]})")
+            seen[cid] = line
     sides: dict[str, list[tuple[int, int]]] = {"left": [], "right": []}
     if "side" in col:
-        for k, r in enumerate(body):
-            s = r[col["side"]].strip().lower()
+        for k, (r, line) in enumerate(zip(body, numbers, strict=True)):
+            s = cell(r, "side", line).lower()
             if s in sides:
-                o = int(r[col["order"]]) if "order" in col and r[col["order"]].strip() else k
-                sides[s].append((o, k))
+                o = cell(r, "order", line) if "order" in col else ""
+                try:
+                    sides[s].append((int(o) if o else k, k))
+                except ValueError:
+                    raise ValueError(f"{path}: line {line}: order {o!r} is not an "
+                                     "integer") from None
     left = [k for _, k in sorted(sides["left"])]
     right = [k for _, k in sorted(sides["right"])]
-    return Track(cones.reshape(-1, 2), ids, left, right, closed=closed, name=Path(path).stem)
+    meta = {}
+    if "color" in col:
+        meta["colors"] = tuple(cell(r, "color", line).lower() or "unknown"
+                               for r, line in zip(body, numbers, strict=True))
+    try:
+        return Track(cones, ids, left, right, closed=closed, name=Path(path).stem, meta=meta)
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from exc
 
 
 def load_map(path: str | Path) -> Track:
@@ -224,16 +342,10 @@ def load_map(path: str | Path) -> Track:
     path = Path(path)
     if path.suffix.lower() in (".yaml", ".yml"):
         stem = path.stem
-        if stem.startswith("cone_map_") and (
-            path.parent / f"boundaries_{stem[len('cone_map_'):]}.yaml"
-        ).exists():
-            return load_dataset_track(path.parent, int(stem[len("cone_map_"):]))
-        with open(path) as fh:
-            cone_map = yaml.safe_load(fh)
-        if not isinstance(cone_map, dict):
-            raise ValueError(f"{path}: expected a mapping id: [x, y]")
-        ids = np.array(sorted(int(k) for k in cone_map), dtype=np.int64)
-        cones = np.array([cone_map[int(i)] for i in ids], dtype=np.float64).reshape(-1, 2)
+        number = stem[len("cone_map_"):] if stem.startswith("cone_map_") else ""
+        if number.isdigit() and (path.parent / f"boundaries_{number}.yaml").exists():
+            return load_dataset_track(path.parent, int(number))
+        ids, cones = _cone_map(path, _read_yaml(path))
         return Track(cones, ids, [], [], closed=False, name=stem)
     if path.suffix.lower() == ".csv":
         return read_csv(path)
