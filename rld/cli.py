@@ -346,7 +346,7 @@ _METHOD_HELP = "Lane-finding method."
 def demo(seed: int, fp_rate: float, range_m: float, method: str, out: str) -> None:
     """Solve a built-in example: a generated track, partly mapped, with false positives."""
     from rld.generator import generate_track
-    from rld.metrics import score_lane
+    from rld.metrics import CATEGORY_MEANING, score_lane
     from rld.plotting import plot_scene
     from rld.simulation import simulate_lap
 
@@ -372,11 +372,15 @@ def demo(seed: int, fp_rate: float, range_m: float, method: str, out: str) -> No
     click.echo(f"again       {1000 * (time.perf_counter() - t0):.2f} ms (the first call also "
                "loads the solver, and compiles the kernels after a fresh install)")
     score = score_lane(frame, lane.left, lane.right, lane.ok, lane.closed)
-    click.echo(
-        f"score       {score.category} (tolerant: {score.category_tolerant}), "
-        f"IoU {score.iou:.2f}, IoU20 {score.iou20:.2f}, "
-        f"length {score.pred_length_m:.1f} of {score.true_length_m:.1f} m"
-    )
+    verdict = ("critical (the car may leave the track)" if score.critical_at(1.0) else
+               "critical at 0.5 m, not at 1 m" if score.critical_at(0.5) else "not critical")
+    click.echo(f"off line    {score.deviation_m:.2f} m: how far a boundary strays from the true "
+               f"one within 20 m of the car; {verdict}")
+    click.echo(f"length      {score.pred_length_m:.1f} of {score.true_length_m:.1f} m (mean of "
+               "the sides)" + ("; too short: a side under half its true length"
+                               if score.too_short else ""))
+    click.echo(f"index rule  {score.category}: {CATEGORY_MEANING[score.category]} (tolerant: "
+               f"{score.category_tolerant}); IoU {score.iou:.2f}, IoU20 {score.iou20:.2f}")
     try:
         plot_scene(
             frame.cones, lane=lane, pose=frame.pose, gt_left=frame.gt_left,

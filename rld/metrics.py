@@ -24,6 +24,7 @@ from rld.simulation import Frame
 
 __all__ = [
     "CATEGORIES",
+    "CATEGORY_MEANING",
     "CRITICAL",
     "CRITICAL_DISTANCE_M",
     "TOLERANT_DISTANCE_M",
@@ -58,6 +59,15 @@ __all__ = [
 ]
 
 CATEGORIES = ("gt", "near_gt", "too_short", "diverging_ge20", "diverging_lt20", "failed")
+#: What each index-rule category means (DESIGN.md step 7), for printing beside it.
+CATEGORY_MEANING = {
+    "gt": "both sides exactly the true cone sequences",
+    "near_gt": "follows the true cones; may leave them beyond 20 m with IoU >= 0.9",
+    "too_short": "follows the true cones but a side stops under half its true length",
+    "diverging_ge20": "leaves the true cone order beyond 20 m (IoU < 0.9)",
+    "diverging_lt20": "leaves the true cone order within 20 m of the car (critical)",
+    "failed": "no lane (critical)",
+}
 #: The categories that count as critical failures (DESIGN.md): diverging below 20 m, no lane.
 CRITICAL = frozenset({"diverging_lt20", "failed"})
 CRITICAL_DISTANCE_M = 20.0

@@ -61,8 +61,13 @@ def test_demo_prints_a_summary_and_writes_a_plot(tmp_path):
     out = tmp_path / "lane.png"
     result = CliRunner().invoke(main, ["demo", "--out", str(out)])
     assert result.exit_code == 0, result.output
-    for word in ("track", "frame", "status", "solve time", "again", "score", "IoU"):
+    for word in ("track", "frame", "status", "solve time", "again", "off line", "length",
+                 "index rule", "IoU"):
         assert word in result.output
+    # The index-rule category is printed with what it means.
+    from rld.metrics import CATEGORY_MEANING
+    line = next(x for x in result.output.splitlines() if x.startswith("index rule"))
+    assert any(f"{c}: {m}" in line for c, m in CATEGORY_MEANING.items())
     assert out.exists() and out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

@@ -980,6 +980,12 @@ def test_from_line_through_the_polylines_own_points(pts, i, j):
 # --------------------------------------------------------------------------------------------
 
 
+def test_every_category_has_a_meaning():
+    from rld.metrics import CATEGORY_MEANING
+
+    assert set(CATEGORY_MEANING) == set(CATEGORIES)
+
+
 def test_geometric_true_lane_is_zero_and_not_short():
     left, right = straight(10)
     h = Hand(left, right)
