@@ -37,7 +37,8 @@ __all__ = ["SearchGraph", "SearchResult", "CandidateList", "closable", "merge_re
 #: Search-graph constructions: ``radius`` (IV-A, the paper's choice) and ``delaunay`` (IV-B).
 GRAPHS = ("radius", "delaunay")
 #: Two detections nearer than this (metres) are one cone seen twice or a cone and a false
-#: positive beside it, which RLD's objective cannot tell apart (``pair_drops``' default).
+#: positive beside it, which RLD's objective cannot tell apart (``pair_drops``' default; the
+#: solver passes ``clc.solver.PAIR_DROP_M``). Measured against 1.5 m: docs/tuning.md#pair_drop_m.
 DUPLICATE_M = 1.0
 
 

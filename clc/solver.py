@@ -69,73 +69,75 @@ __all__ = ["ClcModel", "MATCH_TOLERANCE_M", "dive_cost", "dive_costs", "jog_posi
 
 log = logging.getLogger(__name__)
 
+#: Warm start (``warm_start=True``): a previous lane cone is matched to the nearest map cone
+#: within this many metres. Source: our choice, as ``rld.solver.MATCH_TOLERANCE_M``.
 MATCH_TOLERANCE_M = 0.5
-#: The contested-choice dives (``clc.search.contested_dives``, ``LaneParams.contested_margin``):
-#: the iterations of each beyond rebuilding the lane it follows, and how far along each
-#: boundary of the ranked lane (metres of path ahead of the car) a close call is revisited; the
-#: critical distance of the protocol is 20 m.
+#: Iterations of each contested-choice dive (``clc.search.contested_dives``) beyond rebuilding
+#: the lane it follows. Chosen by measurement: docs/tuning.md#dive_iterations.
 DIVE_ITERATIONS = 40
+#: How far along each boundary of the ranked lane (metres of path ahead of the car) close calls
+#: are revisited, and the dive judge's radius; the protocol's critical distance is 20 m. Chosen
+#: by measurement: docs/tuning.md#dive_reach_m.
 DIVE_REACH_M = 25.0
-#: Rounds of dives: a dive whose lane wins has its own close calls revisited.
+#: Rounds of dives: a dive whose lane wins has its own close calls revisited. Chosen by
+#: measurement: docs/tuning.md#dive_rounds.
 DIVE_ROUNDS = 3
-#: Jog dives (``jog_positions``): in each round, the ``JOG_DIVES`` largest width jogs of the
-#: winner within the dive reach, where the second difference of its matching-line lengths
-#: exceeds ``JOG_THRESHOLD_M``, are revisited like close calls; 0 dives turns them off
-#: (docs/clc.md, "Jog dives").
+#: Jog dives (``jog_positions``): a width jog of the winner within the dive reach, where the second
+#: difference of its matching-line lengths exceeds this (metres), is revisited like a close
+#: call. Chosen by measurement: docs/tuning.md#jog_threshold_m.
 JOG_THRESHOLD_M = 1.0
+#: The most jog dives per round, the largest jogs first; 0 turns them off. Chosen by
+#: measurement: docs/tuning.md#jog_dives.
 JOG_DIVES = 2
-#: The runner-up start pairs (``LaneParams.start_pairs``) are searched while the best
-#: candidate so far has fewer than this many cones on its shorter side; the deepest wins (ties:
-#: the more symmetric pair).
+#: The runner-up start pairs (``LaneParams.start_pairs``) are searched while the best candidate
+#: so far has fewer than this many cones on its shorter side; the deepest wins (ties: the more
+#: symmetric pair). Chosen by measurement: docs/tuning.md#min_start_depth.
 MIN_START_DEPTH = 5
-#: A winner with a boundary that reaches less than this far (metres of path ahead of the car)
-#: while the map holds cones farther ahead is *short*: besides its close calls, every choice
-#: of it within the dive reach is revisited by a dive that rebuilds the other boundary too,
-#: from beside the choice (``contested_dives(..., cut_other=True)``). 0 turns it off. 20 m is
-#: the protocol's critical distance (docs/clc.md, "Short lanes revisited").
+#: A winner with a boundary shorter than this (metres of path ahead of the car) while the map
+#: holds cones farther ahead is *short*: every choice within the reach is revisited, the other
+#: side rebuilt too; 0 turns it off. Source: the protocol's 20 m; docs/tuning.md#short_lane_m.
 SHORT_LANE_M = 20.0
-#: A main search that stops at it_max with fewer candidates than this was trapped: a width
-#: above w_max that the other boundary never mends while both wander on through the map, an
-#: exponential subtree of infeasible pairs (track 6 at R = 30 m, 30 %: 8 candidates in 20 000
-#: iterations). Its start pair is searched again with the give-up rule
-#: (``enumerate_candidates(stale=STALE_EXTENSIONS)``), after the start pair is chosen, and the
-#: candidates of both searches are ranked (docs/clc.md, "Trapped searches"). 0 turns it off.
+#: A main search that stops at it_max with fewer candidates than this was trapped: its start
+#: pair is searched again with the give-up rule (``STALE_EXTENSIONS``) and both searches'
+#: candidates ranked; 0 turns it off. Chosen by measurement: docs/tuning.md#trapped_candidates.
 TRAPPED_CANDIDATES = 20
 #: The give-up rule's run of infeasible extensions (``enumerate_candidates(stale=...)``).
+#: Chosen by measurement: docs/tuning.md#stale_extensions.
 STALE_EXTENSIONS = 8
-#: In each dive round, the winner without one cone of a close pair (two consecutive boundary
-#: cones nearer than ``PAIR_DROP_M`` within the reach; ``clc.search.pair_drops``)
-#: is judged beside the dives (docs/clc.md, "Close pairs"; ``lane.stats["pair_drops"]``).
+#: In each dive round, the winner without one cone of a close pair (``clc.search.pair_drops``)
+#: is judged beside the dives (``lane.stats["pair_drops"]``). Chosen by measurement:
+#: docs/tuning.md#pair_drops.
 PAIR_DROPS = True
-#: The distance (m) below which two consecutive boundary cones are a close pair: 1.5 m, measured
-#: against ``clc.search.DUPLICATE_M`` (1 m) on ten seeds (docs/clc.md, "Close pairs").
+#: The distance (metres) below which two consecutive boundary cones within the reach are a
+#: close pair. Chosen by measurement: docs/tuning.md#pair_drop_m.
 PAIR_DROP_M = 1.5
 #: In each dive round, the winner with a skipped cone taken in (``clc.search.skip_inserts``)
-#: is judged beside the dives (docs/clc.md, "Skipped cones taken in";
-#: ``lane.stats["skip_inserts"]``).
+#: is judged beside the dives (``lane.stats["skip_inserts"]``). Chosen by measurement:
+#: docs/tuning.md#skip_inserts.
 SKIP_INSERTS = True
-#: In each dive round, the winner with a boundary's first cone replaced by a cone inside the
-#: lane beside its first edge, at most this far from it (metres; ``clc.search.
-#: start_replacements``; 0 turns it off; ``lane.stats["start_replacements"]``).
+#: In each dive round, the winner with a boundary's first cone replaced by a cone inside the lane
+#: beside its first edge, at most this far from it (metres; ``clc.search.start_replacements``;
+#: 0 turns it off). Chosen by measurement: docs/tuning.md#start_replace_m.
 START_REPLACE_M = 1.5
-#: A complete enumeration's pick is judged too, against its local edits only (the pair drops,
-#: the skipped cones taken in and the start replacements): a dive could only find a lane the
-#: ranker has already seen (docs/clc.md, "Skipped cones taken in").
+#: A complete enumeration's pick is judged too, against its local edits only (a dive could only
+#: find a lane the ranker has already seen). Chosen by measurement:
+#: docs/tuning.md#judge_complete.
 JUDGE_COMPLETE = True
-#: After the dive rounds, up to this many passes in which the winner without one cone that
-#: bends its boundary away from the lane (``clc.search.outward_drops``) is judged; the
-#: cheapest such lane, if cheaper, wins the pass (docs/clc.md, "Outward drops";
-#: ``lane.stats["outward_drops"]``). 0 turns it off.
+#: After the dive rounds, up to this many passes in which the winner without one cone that bends
+#: its boundary away from the lane (``clc.search.outward_drops``) is judged; 0 turns it off.
+#: Chosen by measurement: docs/tuning.md#outward_drop_passes.
 OUTWARD_DROP_PASSES = 2
 #: What ``ClcModel._dive_rounds`` counts, as ``lane.stats`` keys.
 ROUND_COUNTS = ("dives", "dive_rounds", "short_lane_rounds", "jog_dives", "pair_drops",
                 "skip_inserts", "start_replacements", "outward_drops")
 #: Drop a closed lane's join cone when the ring is cheaper without it (``drop_ring_join``).
+#: Chosen by measurement: docs/tuning.md#ring_join.
 RING_JOIN = True
 #: Return an open lane from each boundary's first cone not behind the car
-#: (``clc.search.trim_behind``; docs/clc.md).
+#: (``clc.search.trim_behind``). Chosen by measurement: docs/tuning.md#trim_behind.
 TRIM_BEHIND = True
-#: Undo a boundary's hook onto the other boundary's end (``clc.search.unhook``; docs/clc.md).
+#: Undo a boundary's hook onto the other boundary's end (``clc.search.unhook``). Chosen by
+#: measurement: docs/tuning.md#unhook.
 UNHOOK = True
 
 

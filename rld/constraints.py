@@ -318,12 +318,12 @@ def lane_is_feasible(left: np.ndarray, right: np.ndarray, params, closed: bool =
     )
 
 
-#: ``hook_position``: the turn (rad) at least with which a boundary must reach a cone that the
-#: other boundary's end reaches more smoothly, and by how much more sharply than that end.
-#: The true lanes of the six shared tracks come to at most 0.83 and 0.56 (track 4, a bend's
-#: inner side 5 m from its outer one); CLC's clear hooks turn 1.0-1.6 rad onto a cone the other
-#: side's end reaches within 0.1-0.9 rad (2026-12-05, docs/clc.md, "Hooks undone").
+#: ``hook_position``: the turn (radians) at least with which a boundary must reach a cone that
+#: the other boundary's end reaches more smoothly; above every true lane's, below CLC's clear
+#: hooks. Chosen by measurement: docs/tuning.md#hook_min_turn_rad.
 HOOK_MIN_TURN_RAD = 0.9
+#: ``hook_position``: by how much (radians) that turn must exceed the other end's turn to the
+#: cone. Chosen by measurement: docs/tuning.md#hook_margin_rad.
 HOOK_MARGIN_RAD = 0.7
 
 

@@ -75,9 +75,15 @@ from rld.types import Lane, LaneParams, LaneStatus, Pose
 
 __all__ = ["IncrementalRld", "POSE_JUMP_M", "POSE_JUMP_RAD"]
 
+#: A pose more than this far (metres) from the last call's is a jump: the lane restarts from
+#: scratch. Source: our choice.
 POSE_JUMP_M = 5.0
+#: A heading change larger than this (radians, 45 degrees) since the last call is a jump too.
+#: Source: our choice.
 POSE_JUMP_RAD = math.radians(45.0)
-#: Fewer cones than this ahead of the car on a side: the car has reached the lane's end.
+#: Fewer cones than this ahead of the car on a side after an extension: the car has nearly
+#: reached the lane's end, so the solver restarts from the car. Chosen by measurement:
+#: docs/tuning.md#min_ahead.
 MIN_AHEAD = 6
 #: The frontier program's stats an extend call passes on in ``lane.stats["frontier"]``.
 FRONTIER_STATS = ("n_cones_used", "n_cols", "n_rows", "solve_time_s", "backend", "objective")

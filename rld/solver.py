@@ -36,12 +36,18 @@ from rld.types import Lane, LaneParams, LaneStatus, Pose
 
 __all__ = ["RldModel", "cone_window", "MATCH_TOLERANCE_M", "DEFAULT_TIME_LIMIT_S"]
 
+#: Warm start: a previous lane cone is matched to the nearest window cone within this many
+#: metres (SLAM maps keep their cones). Source: our choice.
 MATCH_TOLERANCE_M = 0.5
-DEFAULT_TIME_LIMIT_S = 0.4  # the paper's success limit (section IV-A)
+#: The default solve budget, seconds. Source: RLD section IV-A (its success limit).
+DEFAULT_TIME_LIMIT_S = 0.4
+#: Most rounds of cycle cuts (RLD eq. 5) in one solve. Source: our choice.
 MAX_CYCLE_ROUNDS = 25
-#: Re-solves after the program's optimum failed the shared lane predicate (``lane_cut``).
+#: Re-solves after the program's optimum failed the shared lane predicate (``lane_cut``), within
+#: the budget. Source: our choice.
 MAX_LANE_CUT_ROUNDS = 3
-#: Solve again without the heading row (eq. 9) when the program is infeasible.
+#: Solve again without the heading row (eq. 9) when no lane meets it. Chosen by measurement:
+#: docs/tuning.md#heading_fallback.
 HEADING_FALLBACK = True
 
 

@@ -136,215 +136,130 @@ class LaneParams:
     """
 
     max_cone_spacing_m: float = 5.5
-    """Longest edge between consecutive cones of one boundary (CLC d_max, eq. 2; the rules
-    say 5 m, the dataset has up to 5.2 m)."""
+    """Longest edge between consecutive cones of one boundary, metres (CLC d_max, eq. 2; RLD's
+    candidate edges). Source: CLC section VIII-C (the rules space a side's cones at most 5 m
+    apart); larger values measured, not kept: docs/tuning.md#max_cone_spacing_m."""
     min_width_m: float = 2.5
-    """Narrowest lane (CLC w_min, eq. 13; RLD d_min, eq. 7). The rules guarantee 3 m."""
+    """Narrowest lane, metres (CLC w_min, eq. 13; RLD d_min, eq. 7). Source: CLC section VIII-C;
+    the rules guarantee a 3 m track."""
     max_width_m: float = 6.5
-    """Widest lane (CLC w_max, eq. 13)."""
+    """Widest lane, metres (CLC w_max, eq. 13). Source: CLC section VIII-C."""
     max_turn_angle_rad: float = math.pi / 2
-    """Largest absolute turn between consecutive segments of a boundary (CLC phi_max, eq. 15).
-    With theta_e = pi it is also RLD's critical angle cost t_crit (eq. 28)."""
+    """Largest absolute turn between consecutive segments of a boundary, radians (CLC phi_max,
+    eq. 15); with theta_e = pi it also sets RLD's t_crit (eq. 28, ``max_angle_cost``). Source:
+    CLC section VIII-C (90 degrees)."""
     expected_spacing_m: float = 3.5
-    """RLD d_e (eq. 18): the expected distance between consecutive cones of one side."""
+    """RLD d_e (eq. 18): the expected distance between consecutive cones of one side, metres.
+    Source: our first choice; the paper prints no value (docs/formulation.md)."""
     spacing_tolerance_m: float = 2.2
-    """RLD d_t (eq. 18): the spacing deviation that costs 1. The paper prints no value. 2.2
-    rather than 2.0 (2026-12-01, six shared tracks, R = 50 m): a 1 m edge between two cones
-    on one boundary line then earns more than it costs, so a lane takes both cones of such a
-    pair instead of skipping the labelled one. Tolerant critical failures of rld-incremental
-    (every pose) 1.6 / 1.6 / 3.2 -> 0.4 / 0.4 / 2.0 % at 0 / 10 / 30 % false positives, strict
-    3.9 / 5.3 / 6.9 -> 3.9 / 6.7 / 8.3 %; of the windowed rld (every 3rd pose) tolerant
-    2.6 / 4.4 / 7.4 -> 2.2 / 3.9 / 7.4 %, strict 4.8 / 8.3 / 12.2 -> 5.0 / 9.6 / 13.9 %. The
-    tolerant rule forgives exactly the cones that the strict one adds (within 0.5 m of the
-    true boundary line), so it is the one to weigh."""
+    """RLD d_t (eq. 18): the spacing deviation that costs 1, metres; the paper prints no value.
+    2.2 so that a 1 m edge between two cones of one boundary line earns more than it costs.
+    Chosen by measurement: docs/tuning.md#spacing_tolerance_m."""
     angle_tolerance_rad: float = 0.7
-    """RLD theta_t (eq. 20): the turn angle that costs 1 (theta_e = pi, a straight line). The
-    paper prints no value. Tuned on two benchmarks at once (2026-11-25, n = 20 window, CP-SAT):
-    on the shared tracks (R = 50 m, every 6th pose) 0.7 rad gave 4.7 % critical failures at 0 %
-    false positives and 12.9 % at 30 % where 1.0 rad gave 6.8 and 23.9 % (every 12th pose); in
-    the RLD paper's own experiment (n = 12, 40 poses per topology) 3.3 / 25.8 % inaccurate at
-    1:5 / 1:1 against 5.8 / 30.0 %. Smaller values (0.35-0.5) helped the paper's experiment at
-    1:1 but cut lanes short in the shared tracks' hairpins (16-25 % critical)."""
+    """RLD theta_t (eq. 20): the turn angle that costs 1, radians (theta_e = pi, a straight
+    line); the paper prints no value. Smaller values cut lanes short in hairpins. Chosen by
+    measurement: docs/tuning.md#angle_tolerance_rad."""
     max_spacing_cost: float = 4.0
-    """RLD s_crit (eq. 27): edges with a larger spacing cost are excluded. With the defaults it
-    rules out edges shorter than 0.39 m (3.5 - 2.2 * 4^(1/4))."""
+    """RLD s_crit (eq. 27), dimensionless: edges with a larger spacing cost are excluded; with
+    the defaults, edges shorter than 0.39 m (3.5 - 2.2 * 4^(1/4)). Source: our first choice;
+    the paper prints no value."""
     w_spacing: float = 1.0
-    """RLD w_s (eq. 29)."""
+    """RLD w_s (eq. 29), dimensionless. Source: our first choice; the paper prints no weights."""
     w_angle: float = 1.0
-    """RLD w_t (eq. 29)."""
+    """RLD w_t (eq. 29), dimensionless. Source: our first choice; the paper prints no weights."""
     w_heading: float = 1.0
-    """RLD w_p (eq. 29)."""
+    """RLD w_p (eq. 29), dimensionless. Source: our first choice; the paper prints no weights."""
     w_benefit: float = 2.5
-    """RLD w_b (eq. 29): the reward for every chosen edge."""
+    """RLD w_b (eq. 29): the reward for every chosen edge, dimensionless; the paper prints no
+    value. Chosen by measurement (a grid with theta_t and d_t): docs/tuning.md#w_benefit."""
     w_regularity: float = 0.0
-    """Weight of the spacing-regularity cost (our extension, not in either paper; 0 = off, the
-    default): paid at every interior cone of a boundary for the ratio of its two edges'
-    lengths (``rld.costs.regularity_cost``), in RLD's objective and so in ``lane_cost``.
-    Measured 2026-12-03 with 1.0: the RLD paper's experiment (seeds 0-4) went from 4.0 / 22.3
-    % to 4.0 / 15.6 % inaccurate at 1:5 / 1:1, but on the shared tracks (rld, seed 0, every
-    2nd pose) tolerant critical failures rose at R = 30 / 50 m, 10 and 30 %: 6.10 -> 6.82,
-    12.63 -> 13.21, 3.63 -> 4.50, 8.42 -> 8.85 %, where real spacing changes from straight to
-    corner; and CLC (its dive judge is ``lane_cost``) went from 1.36 to 2.79 % at R = 50 m,
-    30 %. So it stays off."""
+    """Weight of the spacing-regularity cost (``rld.costs.regularity_cost``; ours, dimensionless)
+    in RLD's objective and ``lane_cost``; 0, the default, turns it off: real spacing changes from
+    straight to corner. Chosen by measurement: docs/tuning.md#w_regularity."""
     w_width_roughness: float = 0.2
-    """Weight of the width roughness (``rld.costs.width_roughness``, per m^2; ours) in CLC's
-    dive judge, beside RLD's objective within the dive reach (``clc.solver.dive_cost``); 0
-    turns it off. Measured 2026-12-03 on the six shared tracks, every pose, tolerant critical
-    %, seeds 0-2 pooled, 0 -> 0.2: R = 30 m 0.29 / 1.48 / 4.63 / 18.00 -> 0.22 / 1.07 / 4.22 /
-    16.79 at 0 / 10 / 30 / 50 % false positives, R = 50 m 0.07 / 0.12 / 1.36 / 8.32 -> 0.07 /
-    0.12 / 1.33 / 8.13; on seeds 3-4 (not used to choose it) R = 30 m 10 / 30 % 1.53 / 6.55 ->
-    1.35 / 6.48 and R = 50 m 30 % 1.60 -> 1.09. 0.1 / 0.3 / 0.5 / 2.0 gave 1.41 / 1.16 / 1.14
-    / 1.09 at R = 30 m 10 % and 1.33 / 1.46 / 1.48 / 2.38 at R = 50 m 30 % (docs/clc.md)."""
+    """Weight of the width roughness (``rld.costs.width_roughness``, per m^2; ours) in CLC's dive
+    judge (``clc.solver.dive_cost``); 0 turns it off. The roughness of true lanes in hairpins
+    caps it. Chosen by measurement: docs/tuning.md#w_width_roughness."""
     w_turn_roughness: float = 2.0
-    """Weight of the turn roughness (``rld.costs.turn_roughness``, per rad^2; ours) in CLC's
-    dive judge, beside the width roughness (``clc.solver.dive_cost``); 0 turns it off. A
-    false positive inserted between two true cones, 0.5-0.6 m off their line, zigzags the
-    boundary's turns. Measured 2026-12-03 on the six shared tracks, every pose, tolerant
-    critical %, 0 -> 2: chosen on seeds 0-2 (0.5 / 1 / 2 / 3 / 5 at R = 30 m 10 %: 1.02 / 0.99
-    / 0.95 / 2.74 / 3.42 against 1.02), then on seeds 3-9 R = 30 m 10 / 30 % 1.29 / 3.57 ->
-    0.86 / 3.66, R = 50 m 30 % 1.81 -> 1.59. From 3 on, true cones of the real tracks where
-    the boundary's turn changes abruptly are dropped on every seed (docs/clc.md)."""
+    """Weight of the turn roughness (``rld.costs.turn_roughness``, per rad^2; ours) in CLC's dive
+    judge (``clc.solver.dive_cost``); 0 turns it off. Larger weights drop true cones where a real
+    boundary's turn changes abruptly. Chosen by measurement: docs/tuning.md#w_turn_roughness."""
     regularity_tolerance: float = 2.0
-    """rho_t of the regularity cost: the ratio of consecutive edge lengths that costs 1 (> 1).
-    On the shared tracks 90 % of consecutive true edges are within a ratio of 1.49, 99 % of
-    2.03; the largest is 2.8."""
+    """rho_t of the regularity cost (``w_regularity``; ours): the ratio of consecutive edge
+    lengths that costs 1, dimensionless, above 1. Chosen by measurement of the true edges:
+    docs/tuning.md#regularity_tolerance."""
     w_color: float = 2.0
-    """Weight of the colour cost (our extension, RLD section V's future work): added for an edge
-    joining a cone labelled left to one labelled right, and in the sided formulation for a cone
-    on the side opposite to its label. Only when ``colors`` are given."""
+    """Weight of the colour cost (ours; RLD section V's future work): paid for an edge joining
+    cones labelled left and right, and in the sided formulation for a cone on the side opposite
+    its label; only with ``colors``. Source: our first choice."""
     w_confidence: float = 1.0
-    """Weight of the confidence cost (our extension, RLD section V): w (1 - confidence) for
-    every cone the lane uses. Only when ``confidence`` is given."""
+    """Weight of the confidence cost (ours; RLD section V): w (1 - confidence) for every cone the
+    lane uses; only with ``confidence``. Source: our first choice."""
     heading_radius_m: float = 4.0
-    """RLD d_h (eq. 9): edges whose nearest point is this close to the car count for h."""
+    """RLD d_h (eq. 9), metres: edges whose nearest point is this close to the car count for h.
+    Source: our first choice (the paper prints no value); 4.5 m measured, not kept:
+    docs/tuning.md#heading_radius_m."""
     heading_tolerance_rad: float = math.pi / 4
-    """RLD theta_heading (eq. 9): most an edge near the car may deviate from the heading."""
+    """RLD theta_heading (eq. 9), radians: the most an edge near the car may deviate from the
+    heading. Source: our first choice (the paper prints no value)."""
     heading_min_distance_m: float = 1.0
-    """Floor on d_car in the heading cost (RLD eq. 25) so an edge passing under the car does not
-    divide by zero. Our addition."""
+    """Floor on d_car in RLD's heading cost (eq. 25), metres, so that an edge passing under the
+    car does not divide by zero. Source: ours (eq. 25 has no floor)."""
     near_radius_m: float = 4.5
-    """RLD d_near (eqs 11-12) and the CLC start-vertex search radius (IV-C): the first cone of
-    each boundary lies within this distance of the car."""
+    """RLD d_near (eqs 11-12) and CLC's start-vertex search radius (IV-C), metres: the first cone
+    of each boundary lies within it. Source: the rules (a side's cones up to 5 m apart need more
+    than CLC IV-C's "such as 2 m")."""
     far_endpoint_max_m: float = 6.5
-    """RLD d_max of eq. 17: the most the two far endpoints may be apart. The paper prints no
-    value; it says the constraint uses "the maximum reasonable lane width", so the widest lane
-    (``max_width_m``, 6.5 m). 10 m until 2026-12-01; 6.5 m measured that day (tolerant
-    critical %, strict in brackets): the windowed rld (R = 50 m, every 3rd pose) 2.2 (5.0) ->
-    1.7 (4.6) at 0 % false positives and 7.6 (14.2) -> 7.0 (12.9) at 30 %; rld-incremental
-    (every pose) 0.4 (3.9) / 0.4 (6.7) / 2.0 (8.3) -> 0.1 (3.6) / 0.1 (6.4) / 3.1 (9.4) at
-    0 / 10 / 30 %, lanes 152 -> 162 of 168 m at 0 %; the RLD paper's experiment 26.1 -> 23.3 %
-    inaccurate at 1:1 (1:5 unchanged, 2.8 %). 7.5 m gave the same as 6.5 for rld-incremental,
-    9 m was worse than both."""
+    """RLD d_max (eq. 17), metres: the most the two far endpoints may be apart. The paper prints
+    no value but calls it "the maximum reasonable lane width", so ``max_width_m``. Chosen by
+    measurement: docs/tuning.md#far_endpoint_max_m."""
     max_iterations: int = 250
-    """CLC it_max (Alg. 2): the most extensions one enumeration makes. The paper uses 2500; on
-    the shared tracks (every 4th pose, learned ranker) 250 gave fewer critical failures (R = 50
-    m: 7.2 against 8.7 % at 0 % false positives, 19.4 against 20.5 % at 30 %; R = 30 m: 12.7
-    against 20.2 % at 0 %; equal at 50 %) in a quarter of the time: the first depth-first dive,
-    led by the next-vertex decider, is usually right near the car, and the later iterations add
-    near-car alternatives that the ranker then sometimes prefers."""
+    """CLC it_max (Alg. 2): the most extensions one enumeration makes. The paper's 2500 (VIII-C)
+    adds near-car alternatives that the ranker then sometimes prefers, in more time. Chosen by
+    measurement: docs/tuning.md#max_iterations."""
     nvd_distance_weight: float = 0.15
-    """Distance term of CLC's next-vertex decider, radians per metre: the search tries first
-    the neighbour minimising |turn| + this * distance. The paper's eq. 3 is the turn alone (0);
-    measured in PEERS.md, the turn alone prefers the straighter next-but-one cone and skips
-    cones near the car (31 % critical failures against 5.8 % with 0.15)."""
+    """Distance term of CLC's next-vertex decider, radians per metre: the search tries first the
+    neighbour minimising |turn| + this * distance; 0 is eq. 3 (the turn alone), which skips cones
+    near the car. Chosen by measurement: docs/tuning.md#nvd_distance_weight."""
     nvd_lookahead_weight: float = 0.75
-    """Look-ahead of CLC's next-vertex decider: each option's score (|turn| + the distance
-    term) adds this times the best score of the step after it, so the first dive does not take
-    a cone off the line that only a sharp turn can leave (our addition; 0 is the one-step
-    decider). Measured 2026-12-01 on the six shared tracks, every pose, learned ranker, tolerant
-    critical % (strict): R = 50 m 3.4 (6.6) / 6.4 (13.7) / 11.0 (17.9) / 14.6 (32.5) with 0 ->
-    1.6 (4.9) / 3.5 (10.7) / 7.7 (15.9) / 20.2 (34.4) with 0.75 at 0 / 10 / 30 / 50 % false
-    positives; R = 30 m 9.3 / 15.7 / 23.6 / 42.1 -> 7.6 / 12.7 / 20.5 / 30.1. 0.5 and 1.0 were
-    worse at 10 and 30 %, 1.5 and 2.0 worse everywhere."""
+    """Look-ahead of CLC's next-vertex decider (ours, dimensionless): an option's score adds this
+    times the best score of the step after it, so a cone that only a sharp turn can leave ranks
+    lower; 0 is the one-step decider. Chosen by measurement: docs/tuning.md#nvd_lookahead_weight."""
     contested_margin: float = 0.2
-    """CLC's contested-choice dives (our addition, ``clc.search.contested_dives``): when the
-    search stopped at it_max, every choice of the ranked lane within 25 m of path ahead of the
-    car whose runner-up scored at most this much higher in the next-vertex decider (the
-    score's units, radians) is revisited by a search that follows the lane up to there and may
-    not take that cone next (it may come later: a skipped cone is mended), with 40 iterations
-    beyond rebuilding the lane, and by one that bans the cone when the first took it again;
-    the ranker's pick of each dive and of the first search are the finalists, and RLD's
-    objective (``rld.costs.lane_cost``, counted within the 25 m reach of the car since
-    2026-12-02, docs/clc.md) picks among them. A winning dive's own close calls are
-    revisited in a next round, up to ``clc.solver.DIVE_ROUNDS`` (3). 0: no dives. Measured
-    2026-12-01 on the six shared tracks (every pose, learned ranker, tolerant critical %,
-    strict in brackets): R = 50 m 0 -> 0.2 gave 1.60 (4.88) / 3.13 (10.33) / 7.28 (15.50) /
-    19.80 (34.21) -> 0.15 (4.08) / 0.29 (6.84) / 2.55 (11.06) / 11.14 (26.71) at 0 / 10 / 30
-    / 50 % false positives; R = 30 m 7.64 / 12.66 / 20.45 / 29.84 -> 0.66 (4.51) / 6.11
-    (12.23) / 10.63 (21.91) / 25.25 (54.22). One round with the cone banned, the reach counted
-    from the boundary's start (the first version) gave 1.16 / 1.38 / 4.15 / 12.45 at R = 50 m
-    and 6.99 / 10.70 / 11.64 / 25.69 at R = 30 m. With the current dives 0.3 gave 0.29 / 0.44
-    / 2.91 (R = 50 m) and 0.58 / 3.86 / 9.68 (R = 30 m) at 0 / 10 / 30 %, 0.4 0.95 / 1.02 /
-    3.42 and 1.60 / 4.22 / 12.23. The learned ranker alone as the judge of the finalists gave
-    3.86 / 4.22 / 5.46 / 12.15 with the first version (it cannot tell lanes that differ at one
-    cone apart)."""
+    """CLC's contested-choice dives (ours; ``clc.search.contested_dives``): a choice of the lane
+    whose runner-up scored at most this much higher in the next-vertex decider (its radians) is
+    searched again; 0: no dives. Chosen by measurement: docs/tuning.md#contested_margin."""
     skipped_cone_m: float = 0.4
-    """A second trigger of CLC's contested-choice dives (our addition,
-    ``clc.search_kernels.skipped_positions``): an edge of the ranked lane within the dive reach
-    that passes a cone not in the lane, at most this far from the edge's inside (metres), is
-    revisited like a close call: the dive may not take the edge's far cone next, so it takes
-    the skipped one, and RLD's objective judges. The next-vertex decider can rank a cone on
-    the line well below a false positive beyond it, so the margin alone misses such skips.
-    0: this trigger off. Measured 2026-12-02 on the six shared tracks (every pose, learned
-    ranker, tolerant critical %): R = 30 m 0.66 / 6.11 / 10.63 / 25.25 -> 0.66 / 4.73 / 9.97
-    / 24.24 at 0 / 10 / 30 / 50 % false positives with 0.4; R = 50 m unchanged (0.15 / 0.29
-    / 2.55 / 11.14, strict too). 0.3 changed nothing; 0.5 gave the same at R = 30 m but put
-    false positives 0.45 m off the line into lanes at R = 50 m (strict 6.84 -> 7.57 % at 10
-    %), 1.0 was worse at 30 %. Since 2026-12-03 the dive judge also weighs the lane with the
-    skipped cone taken in (``clc.search.skip_inserts``, docs/clc.md)."""
+    """Second trigger of CLC's dives (ours; ``clc.search_kernels.skipped_positions``), metres: an
+    edge of the ranked lane passing an unused cone at most this far inside it is revisited like a
+    close call; 0 turns it off. Chosen by measurement: docs/tuning.md#skipped_cone_m."""
     start_pairs: int = 4
-    """How many start pairs CLC tries, most symmetric first (IV-C), when a pair has no feasible
-    path pair with ``clc.solver.MIN_START_DEPTH`` (5) cones a side: the search runs from the
-    next one and the deepest pair's candidates are ranked, instead of returning no lane or a
-    stub (our addition; 1 is the paper's single pair; the depth rule since 2026-12-02,
-    docs/clc.md). Measured 2026-12-01 on the six shared tracks (R = 50 m,
-    every 2nd pose, learned ranker), tolerant critical %: 1.7 / 3.8 / 8.1 / 20.3 with 1 ->
-    1.7 / 3.3 / 7.7 / 19.9 with 4 at 0 / 10 / 30 / 50 % false positives, the "no lane" poses
-    3 / 3 / 6 -> 0 at 10 / 30 / 50 %. Searching from several pairs and ranking all their
-    candidates instead was worse at 10 % (4.1 with 3 pairs): the ranker then prefers lanes
-    that start at a false positive."""
+    """How many start pairs CLC tries, most symmetric first (IV-C), while the deepest candidate
+    has under ``clc.solver.MIN_START_DEPTH`` cones a side; the deepest wins (ours; 1 is the
+    paper's single pair). Chosen by measurement: docs/tuning.md#start_pairs."""
     start_min_width_m: float = 3.0
     """CLC's start pairs (IV-C) whose two cones are closer than this, metres, come after every
-    wider pair (our addition): the Formula Student rules guarantee a 3 m track, and a pair of
-    false positives about the car's line is more symmetric than the true start cones. 0 is the
-    paper's order. Measured 2026-12-02 on the six shared tracks (every pose, learned ranker,
-    tolerant critical %): R = 50 m 2.40 -> 1.82 at 30 % false positives (8 poses of track 4,
-    where two false positives 2.6 m apart, 1.3 m either side of the car's line, started the
-    lane), R = 30 m 3.86 / 8.73 -> 3.71 / 8.59 at 10 / 30 %, the rest unchanged (R = 50 m 0.07
-    / 0.15 at 0 / 10 %, R = 30 m 0.58 at 0 %). 2.8 m and 3.3 m were each worse somewhere
-    (R = 30 m, 10 %: 3.86 and 4.00)."""
+    wider pair (ours; 0 is the paper's order): the rules guarantee a 3 m track. Chosen by
+    measurement: docs/tuning.md#start_min_width_m."""
     start_behind_m: float = 2.5
-    """CLC's start pairs (IV-C) with a cone more than this far behind the car (metres along its
-    heading) come after the others, within the wide and the narrow group of
-    ``start_min_width_m`` (our addition). The paper searches for start cones within about 2 m
-    of the car; with our 4.5 m (``near_radius_m``, which the spacing of up to 5 m needs) a false
-    positive 3-4 m behind the car could pair more symmetrically than the true cones beside it,
-    and the lane began with it. ``near_radius_m`` or more is the paper's order. Measured
-    2026-12-02 on the six shared tracks (every pose, seeds 0-2 pooled, tolerant critical %
-    at 0 / 10 / 30 / 50 % false positives): R = 30 m 0.36 / 1.58 / 5.12 / 18.61 -> 0.29 /
-    1.48 / 4.92 / 18.27, R = 50 m 0.07 / 0.15 / 1.48 / 8.49 -> 0.07 / 0.12 / 1.36 / 8.42;
-    strict lower everywhere. At R = 50 m, 30 %: 1.0 m gave 1.58 %, 1.5 m 1.50, 2.0 m 1.46,
-    3.0 m 1.38 %."""
+    """CLC's start pairs (IV-C) with a cone more than this far behind the car, metres along its
+    heading, come after the others of their width group (ours; ``near_radius_m`` or more is the
+    paper's order). Chosen by measurement: docs/tuning.md#start_behind_m."""
     start_lookback_m: float = 3.0
-    """CLC's start pairs (IV-C) are sought about the point this far behind the car along its
-    heading first, then about the car (``clc.solver.start_pairs``; our addition; 0 is the
-    paper's, about the car). The search then reaches the lane's first cone ahead of the car
-    along the boundary already passed, and the lane is returned from its first cone not
-    behind the car (``clc.search.trim_behind``). Measured 2026-12-05 on the six shared tracks,
-    ten seeds, every pose, tolerant critical poses at 0 / 10 / 30 % false positives: R = 30 m
-    0 / 80 / 346 -> 10 / 73 / 283, R = 50 m 0 / 40 / 170 -> 0 / 34 / 154; at R = 30 m, 30 %
-    2 m gave 307, 4 m 282, 5 m 300, 6 m 340, 8 m 399 (docs/clc.md, "Start cones behind the
-    car")."""
+    """CLC seeks its start pairs (IV-C) about the point this far behind the car, metres along its
+    heading, first, then about the car; the lane is returned from its first cone not behind the
+    car (ours; 0 is the paper's). Chosen by measurement: docs/tuning.md#start_lookback_m."""
     max_cones: int = 20
-    """How many map cones, nearest ahead of the car, RLD's program takes."""
+    """How many map cones, nearest ahead of the car, RLD's program takes (the paper's n; it uses
+    12, section IV-A). Source: our first choice."""
     duplicate_radius_m: float = 0.3
-    """Cones at most this far apart (m, centre to centre) are one cone, merged before any method
-    runs (``rld.dedup``); a small cone's base is 0.228 m wide (rules). 0 turns merging off."""
+    """Cones at most this far apart, metres centre to centre, are one cone, merged before any
+    method runs (``rld.dedup``); 0 turns merging off. Source: the rules (a small cone's base is
+    0.228 m wide, so two cones cannot stand closer)."""
     window_behind_m: float = 2.0
-    """How far behind the car (along its heading) a cone may lie and still enter RLD's window,
-    metres; the cones beside the car must stay in for the lane to start there. Measured on the
-    shared tracks (R = 50 m, no false positives, every 12th pose): 4.5 m gave 17.9 % critical
-    failures (paths ran back behind the car), 2 m 7.7 %, 0 m 22 % (no start cones)."""
+    """How far behind the car, metres along its heading, a cone may lie and still enter RLD's
+    window; the cones beside the car must stay in for the lane to start there (at 0 some drop out).
+    Chosen by measurement: docs/tuning.md#window_behind_m."""
 
     def __post_init__(self) -> None:
         for name, value in self.__dict__.items():
