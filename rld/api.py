@@ -17,10 +17,11 @@ from typing import Any
 import numpy as np
 
 from rld.baselines import nearest_chain
+from rld.colors import parse_class_probs, parse_colors, side_labels, side_labels_from_probs
 from rld.dedup import merge_duplicates
 from rld.types import MIN_CONES, Lane, LaneParams, Pose, as_cones, as_pose
 
-__all__ = ["solve_lane", "LaneSolver", "METHODS", "DEFAULT_METHOD", "COLOR_CODES",
+__all__ = ["solve_lane", "LaneSolver", "METHODS", "DEFAULT_METHOD",
            "MIN_SIDE_CONES"]
 
 
@@ -134,8 +135,6 @@ METHODS: dict[str, Callable[..., Any]] = {
 }
 #: The method ``solve_lane`` uses when none is named.
 DEFAULT_METHOD = "rld"
-#: Per-cone colour labels accepted in ``colors``.
-COLOR_CODES = {"unknown": 0, "left": 1, "right": 2}
 #: Fewest cones a side of a lane that ``LaneSolver.solve`` returns (issue 42): a boundary is
 #: at least one edge. A method's lane with a shorter side becomes ``NOT_FOUND``.
 MIN_SIDE_CONES = 2
@@ -163,20 +162,16 @@ def _check_confidence(confidence: Any, n: int) -> np.ndarray | None:
     return arr
 
 
-def _check_colors(colors: Any, n: int) -> np.ndarray | None:
-    if colors is None:
-        return None
-    arr = np.asarray(colors)
-    if arr.shape != (n,):
-        raise ValueError(f"colors must have one label per cone ({n}), got shape {arr.shape}")
-    if arr.dtype.kind in "US":
-        bad = set(arr.tolist()) - set(COLOR_CODES)
-        if bad:
-            raise ValueError(f"unknown colour labels {sorted(bad)}; use {sorted(COLOR_CODES)}")
-        return np.array([COLOR_CODES[c] for c in arr.tolist()], dtype=np.int64)
-    if not np.isin(arr, list(COLOR_CODES.values())).all():
-        raise ValueError("colors must be 0 (unknown), 1 (left) or 2 (right)")
-    return arr.astype(np.int64)
+def _side_labels(colors: Any, class_probs: Any, n: int) -> np.ndarray | None:
+    """The methods' per-cone side labels (``rld.colors``) from ``colors`` (class names or codes)
+    or ``class_probs`` ((n, 5) probabilities); None when neither is given."""
+    if colors is not None and class_probs is not None:
+        raise ValueError("give colors or class_probs, not both")
+    if colors is not None:
+        return side_labels(parse_colors(colors, n))
+    if class_probs is not None:
+        return side_labels_from_probs(parse_class_probs(class_probs, n))
+    return None
 
 
 class LaneSolver:
@@ -231,10 +226,12 @@ class LaneSolver:
         colors: Any = None,
         time_limit_s: float | None = None,
         confidence: Any = None,
+        class_probs: Any = None,
     ) -> Lane:
         """Find the lane in ``cones`` ((N, 2) metres) ahead of ``pose`` ((x, y, yaw) or a
         ``Pose``). Raises ``ValueError`` on invalid input; returns a ``Lane`` with ``ok ==
-        False`` when the input is valid but holds no lane.
+        False`` when the input is valid but holds no lane. ``colors`` / ``class_probs``: see
+        ``solve_lane``.
 
         Two rules hold for every method (issue 42). Duplicates: cones at most
         ``params.duplicate_radius_m`` (0.3 m) apart are merged before the method runs
@@ -247,7 +244,7 @@ class LaneSolver:
         method's status, message and side counts)."""
         points = as_cones(cones)
         car = as_pose(pose)
-        labels = _check_colors(colors, points.shape[0])
+        labels = _side_labels(colors, class_probs, points.shape[0])
         conf = _check_confidence(confidence, points.shape[0])
         if time_limit_s is not None and not (time_limit_s > 0):
             raise ValueError(f"time_limit_s must be positive, got {time_limit_s}")
@@ -313,14 +310,18 @@ def solve_lane(
     time_limit_s: float | None = None,
     confidence: Any = None,
     ranker: Any = None,
+    class_probs: Any = None,
 ) -> Lane:
     """Find the driving lane in ``cones`` ahead of the car at ``pose`` (stateless).
 
     ``cones``: array-like (N, 2), metres, in any order, false positives included.
     ``pose``: ``(x, y, yaw)`` (metres, radians) or a ``Pose``.
     ``method``: a name in ``METHODS``. ``params``: a ``LaneParams``. ``backend``: RLD solver
-    backend. ``colors``: optional per-cone labels (``unknown``/``left``/``right`` or 0/1/2),
-    a cost for RLD (``LaneParams.w_color``). ``confidence``: optional per-cone detection
+    backend. ``colors``: optional per-cone Formula Student classes (``blue``, ``yellow``,
+    ``orange``, ``big_orange``, ``unknown``; ``left``/``right`` for blue/yellow) or their codes
+    (0 unknown, 1 yellow, 2 blue, 3 orange, 4 big orange); or ``class_probs``, (N, 5)
+    probabilities in that order (``rld.colors``). Evidence, a cost for RLD
+    (``LaneParams.w_color``), never a hard rule. ``confidence``: optional per-cone detection
     confidence in [0, 1], a cost for RLD (``LaneParams.w_confidence``). The nearest-neighbour
     baseline ignores both. ``time_limit_s``: the solve's time budget (RLD default 0.4 s; CLC is
     bounded by ``params.max_iterations`` instead). ``ranker``: the CLC ranker (default
@@ -328,5 +329,5 @@ def solve_lane(
     whatever the method (``LaneSolver.solve``).
     """
     return LaneSolver(method=method, params=params, backend=backend, ranker=ranker).solve(
-        cones, pose, colors=colors, time_limit_s=time_limit_s, confidence=confidence
-    )
+        cones, pose, colors=colors, time_limit_s=time_limit_s, confidence=confidence,
+        class_probs=class_probs)

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import click
 
-from rld.api import COLOR_CODES, DEFAULT_METHOD, METHODS, LaneSolver, solve_lane
+from rld.api import DEFAULT_METHOD, METHODS, LaneSolver, solve_lane
 from rld.types import Pose
 
 
@@ -420,9 +420,9 @@ def solve(map_path: str, pose: Pose, method: str, backend: str | None,
     """Find the lane in MAP ahead of --pose and print it as the map's cone ids.
 
     MAP is a dataset cone_map_K.yaml (id: [x, y], metres) or our CSV (id,x,y[,side,order]
-    [,color], or just x,y; a color column labels each cone unknown, left or right, an empty
-    cell unknown). Exit code 0 when a lane was found, 1 when the map holds none, 2 for a
-    user error."""
+    [,color], or just x,y; a color column gives each cone's class: blue, yellow, orange,
+    big_orange or unknown (left / right for blue / yellow), an empty cell unknown). Exit code
+    0 when a lane was found, 1 when the map holds none, 2 for a user error."""
     from rld.tracks import load_map
 
     params = _params(param_items)
@@ -432,10 +432,13 @@ def solve(map_path: str, pose: Pose, method: str, backend: str | None,
         raise UserError(_os_error(exc) if isinstance(exc, OSError) else str(exc)) from exc
     colors = track.meta.get("colors")
     if colors is not None:
+        from rld.colors import ALIASES, CLASSES
+
         for cid, label in zip(track.ids.tolist(), colors, strict=True):
-            if label not in COLOR_CODES:
+            if label not in CLASSES and label not in ALIASES:
                 raise UserError(f"{map_path}: cone {cid}: unknown colour {label!r}; use "
-                                f"{', '.join(COLOR_CODES)} (an empty cell is unknown)")
+                                f"{', '.join(CLASSES)} or left / right (an empty cell is "
+                                "unknown)")
     try:
         solver = LaneSolver(method=method, params=params, backend=backend)
         lane = solver.solve(track.cones, pose, colors=colors, time_limit_s=time_limit_s)
@@ -633,10 +636,18 @@ def train_ranker(n_generated: int, train_tracks: list[int], fp_rates: list[float
               help="Also write the results page (Markdown, as docs/results.md) to this file, "
                    "its pictures beside it.")
 @click.option("--param", "param_items", multiple=True, metavar="NAME=VALUE", help=_PARAM_HELP)
+@click.option("--color-accuracy", type=click.FloatRange(0.0, 1.0), default=None,
+              show_default="no colour",
+              help="Simulate colour perception: the probability that a labelled cone reports "
+                   "its true class (blue left, yellow right), 0..1; 0.5 is random.")
+@click.option("--color-unknown", type=click.FloatRange(0.0, 1.0), default=0.1, show_default=True,
+              help="With --color-accuracy: the probability that a labelled cone reports "
+                   "unknown, 0..1.")
 def eval_cmd(dataset: str | None, methods: str, track_ids: list[int] | None, n_generated: int,
              first_generated: int, ranges: list[float], fp_rates: list[float], every: int,
              seeds: list[int], processes: int | None, out: str, plot_failures: bool,
-             results_page: str | None, param_items: tuple[str, ...]) -> None:
+             results_page: str | None, param_items: tuple[str, ...],
+             color_accuracy: float | None, color_unknown: float) -> None:
     """Run the evaluation protocol (DESIGN.md) and write records, tables and plots."""
     import datetime
     import shlex
@@ -669,7 +680,8 @@ def eval_cmd(dataset: str | None, methods: str, track_ids: list[int] | None, n_g
         records = report.evaluate(
             tracks, specs, ranges=ranges, fp_rates=fp_rates, every=every, seed=seeds,
             processes=processes, params=params,
-            plot_failures=str(Path(out) / "failures") if plot_failures else None)
+            plot_failures=str(Path(out) / "failures") if plot_failures else None,
+            color=None if color_accuracy is None else (color_accuracy, color_unknown))
     except ValueError as exc:
         raise UserError(str(exc)) from exc
     command = "rld eval " + " ".join(shlex.quote(a) for a in sys.argv[2:])

@@ -70,6 +70,10 @@ class PoseRecord:
     """A lane found with a side under half its true length (``rld.metrics.too_short_sides``)."""
     first_call: bool = False
     """The solver's first call (lazy set-up, kernel compilation): start-up, not latency."""
+    color_accuracy: float = math.nan
+    """The simulated colour perception's accuracy A (``rld.simulation``); NaN without colour."""
+    color_unknown: float = math.nan
+    """Its share U of cones reported unknown; NaN without colour."""
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -92,6 +96,8 @@ def run_protocol(
     label: str | None = None,
     plot_failures: str | None = None,
     fp_clearance_m: float = 0.0,
+    color_accuracy: float | None = None,
+    color_unknown: float = 0.0,
 ) -> list[PoseRecord]:
     """Score ``method`` at every ``every``-th pose of each track's lap.
 
@@ -102,7 +108,8 @@ def run_protocol(
     ``label`` names the method in the records (default: ``method``); ``plot_failures``, a
     folder, gets a picture of every critical failure (strict rule). ``fp_clearance_m``: the
     false positives' least distance from the true boundary lines, an analysis knob (0 in the
-    protocol; ``rld.simulation``).
+    protocol; ``rld.simulation``). ``color_accuracy`` / ``color_unknown``: simulated colour
+    perception (``rld.simulation``), its classes passed to the method as ``colors``.
     """
     records: list[PoseRecord] = []
     tracks = list(tracks)
@@ -120,7 +127,8 @@ def run_protocol(
 
     for track in tracks:
         lap = simulate_lap(track, range_m=range_m, fp_rate=fp_rate, seed=seed,
-                           fp_clearance_m=fp_clearance_m)
+                           fp_clearance_m=fp_clearance_m, color_accuracy=color_accuracy,
+                           color_unknown=color_unknown)
         solver = make() if stateful else None
         tracker = LaneTracker()  # for the stability of the tracked lane, whatever the method
         prev = None  # (pose, raw centreline, tracked centreline) of the previous pose
@@ -129,7 +137,8 @@ def run_protocol(
             frame = lap.frame(k)
             s = solver or make()
             t0 = time.perf_counter()
-            lane = s.solve(frame.cones, frame.pose, time_limit_s=time_limit_s)
+            lane = s.solve(frame.cones, frame.pose, time_limit_s=time_limit_s,
+                           colors=frame.colors)
             latency = time.perf_counter() - t0
             sc = score_lane(frame, lane.left, lane.right, lane.ok, lane.closed)
             raw = lane.centerline if lane.ok else None
@@ -150,6 +159,8 @@ def run_protocol(
                 deviation_m=sc.deviation_m,
                 too_short=sc.too_short,
                 first_call=first,
+                color_accuracy=math.nan if color_accuracy is None else float(color_accuracy),
+                color_unknown=math.nan if color_accuracy is None else float(color_unknown),
                 **stab,
             ))
             first = False

@@ -77,11 +77,20 @@ def parse_method(text: str) -> MethodSpec:
     return spec
 
 
+def color_label(label: str, color: tuple[float, float] | None) -> str:
+    """A method's label in the tables, with the simulated colour perception (A, U) if any."""
+    return label if color is None else f"{label} colour A={color[0]:g} U={color[1]:g}"
+
+
 def _job(spec: MethodSpec, track: Track, range_m: float, fp_rate: float, every: int, seed: int,
-         plot_failures: str | None, params: LaneParams | None = None) -> list[dict]:
+         plot_failures: str | None, params: LaneParams | None = None,
+         color: tuple[float, float] | None = None) -> list[dict]:
+    acc, unk = (None, 0.0) if color is None else color
     recs = run_protocol([track], method=spec.method, range_m=range_m, fp_rate=fp_rate,
-                        every=every, seed=seed, stateful=True, label=spec.label,
-                        plot_failures=plot_failures, params=params, **spec.kwargs())
+                        every=every, seed=seed, stateful=True,
+                        label=color_label(spec.label, color), plot_failures=plot_failures,
+                        params=params, color_accuracy=acc, color_unknown=unk,
+                        **spec.kwargs())
     return [r.to_dict() for r in recs]
 
 
@@ -89,11 +98,14 @@ def evaluate(tracks: Sequence[Track], specs: Sequence[MethodSpec], ranges=(30.0,
              fp_rates=(0.0, 0.1, 0.3, 0.5), every: int = 1, seed: int | Sequence[int] = 0,
              processes: int | None = None, progress: bool = True,
              plot_failures: str | None = None,
-             params: LaneParams | None = None) -> list[PoseRecord]:
+             params: LaneParams | None = None,
+             color: tuple[float, float] | None = None) -> list[PoseRecord]:
     """Every (spec, track, range, rate, seed) of the protocol; ``seed``: the false positives'
     seed, or several (each a lap of its own; ``summaries`` pools them and keeps each seed's
     critical rates). ``processes`` workers (default: the CPU count). ``params``: every
-    method's ``LaneParams`` (default: the defaults). Records come back in a
+    method's ``LaneParams`` (default: the defaults). ``color``: (accuracy A, unknown share U)
+    of the simulated colour perception (``rld.simulation``; default none), its classes given
+    to every method, the labels suffixed (``color_label``). Records come back in a
     fixed order whatever the scheduling. A method that
     keeps its lane from call to call (``rld-incremental``) says how small ``every`` must be
     (its ``max_every``: 5, poses lie 1 m apart and a larger stride is a pose jump, which
@@ -118,11 +130,12 @@ def evaluate(tracks: Sequence[Track], specs: Sequence[MethodSpec], ranges=(30.0,
     bar = tqdm(total=len(jobs), desc="rld eval", unit="lap", disable=not progress)
     if n <= 1:
         for i, (s, t, r, fp, sd) in enumerate(jobs):
-            out[i] = _job(s, t, r, fp, every, sd, plot_failures, params)
+            out[i] = _job(s, t, r, fp, every, sd, plot_failures, params, color)
             bar.update(1)
     else:
         with ProcessPoolExecutor(max_workers=n) as pool:
-            futures = {pool.submit(_job, s, t, r, fp, every, sd, plot_failures, params): i
+            futures = {pool.submit(_job, s, t, r, fp, every, sd, plot_failures, params,
+                                   color): i
                        for i, (s, t, r, fp, sd) in enumerate(jobs)}
             for fut in as_completed(futures):
                 out[futures[fut]] = fut.result()

@@ -13,6 +13,13 @@ Along one lap of a track with annotated boundaries:
    (not behind it) forward, up to the first cone not yet in the map;
 6. the method sees the partial map shuffled (seeded per pose), without labels.
 
+Colour perception (issue 41; off unless ``color_accuracy`` is given): one class per point for
+the whole lap (``rld.colors`` codes): each real labelled cone reports unknown with probability
+``color_unknown``, else its true class (left boundary blue, right yellow) with probability
+``color_accuracy`` and the other side's class otherwise; unlabelled real cones and false
+positives report blue, yellow or unknown at random. Seeded from the lap's seed on a stream of
+its own, so the false positives are the same draw with and without colours.
+
 ``fp_clearance_m`` (0 in the protocol) is an analysis knob, not part of the protocol: false
 positives are then drawn only at least that far from both true boundary lines
 (``Track.boundary_distance``), the same number of them. Sweeping it says how much of a method's
@@ -64,6 +71,8 @@ class Frame:
     left_seq: np.ndarray
     right_seq: np.ndarray
     closed: bool
+    colors: np.ndarray | None = None
+    """Each frame cone's perceived class code (``rld.colors``), or None without colour."""
 
     @property
     def is_false_positive(self) -> np.ndarray:
@@ -90,6 +99,8 @@ class Lap:
         seed: int = 0,
         step_m: float = 1.0,
         fp_clearance_m: float = 0.0,
+        color_accuracy: float | None = None,
+        color_unknown: float = 0.0,
     ) -> None:
         if not 0.0 <= fp_rate < 1.0:
             raise ValueError(f"fp_rate must be in [0, 1), got {fp_rate}")
@@ -119,6 +130,27 @@ class Lap:
         seen = in_field(self.all_points, c, self.headings, self.range_m)  # (K, P)
         first = np.where(seen.any(axis=0), seen.argmax(axis=0), np.iinfo(np.int64).max)
         self.first_seen = first.astype(np.int64)
+        self.color_accuracy = color_accuracy
+        self.color_unknown = float(color_unknown)
+        self.point_colors = (None if color_accuracy is None
+                             else self._perceive_colors(float(color_accuracy), self.color_unknown))
+
+    def _perceive_colors(self, accuracy: float, unknown: float) -> np.ndarray:
+        """One class code per point of ``all_points`` (the module docstring's colour model)."""
+        from rld.colors import CLASSES
+
+        for name, v in (("color_accuracy", accuracy), ("color_unknown", unknown)):
+            if not (np.isfinite(v) and 0.0 <= v <= 1.0):
+                raise ValueError(f"{name} must be a probability in [0, 1], got {v}")
+        blue, yellow, unk = (CLASSES.index(c) for c in ("blue", "yellow", "unknown"))
+        rng = np.random.default_rng([self.seed, 41])
+        n = self.all_points.shape[0]
+        out = rng.choice(np.array([blue, yellow, unk]), size=n)  # unlabelled and false positives
+        for side, true, other in ((self.track.left, blue, yellow),
+                                  (self.track.right, yellow, blue)):
+            u, v = rng.random(side.size), rng.random(side.size)
+            out[side] = np.where(u < unknown, unk, np.where(v < accuracy, true, other))
+        return out.astype(np.int64)
 
     def _sample_false_positives(self, count: int, rng: np.random.Generator) -> np.ndarray:
         if count == 0:
@@ -194,14 +226,16 @@ class Lap:
             left_seq=to_frame[self.track.left],
             right_seq=to_frame[self.track.right],
             closed=self.track.closed,
+            colors=None if self.point_colors is None else self.point_colors[members],
         )
 
 
 def simulate_lap(
     track: Track, range_m: float = 50.0, fp_rate: float = 0.0, seed: int = 0, step_m: float = 1.0,
-    fp_clearance_m: float = 0.0,
+    fp_clearance_m: float = 0.0, color_accuracy: float | None = None, color_unknown: float = 0.0,
 ) -> Lap:
-    """Set up the protocol's lap over ``track`` (see ``Lap``; ``fp_clearance_m``, the module
-    docstring: 0 in the protocol)."""
+    """Set up the protocol's lap over ``track`` (see ``Lap``; ``fp_clearance_m`` and the colour
+    model: the module docstring; no colours unless ``color_accuracy`` is given)."""
     return Lap(track, range_m=range_m, fp_rate=fp_rate, seed=seed, step_m=step_m,
-               fp_clearance_m=fp_clearance_m)
+               fp_clearance_m=fp_clearance_m, color_accuracy=color_accuracy,
+               color_unknown=color_unknown)

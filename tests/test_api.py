@@ -77,10 +77,10 @@ def test_options_are_validated():
         LaneSolver(method="rld", backend="highs:GLPK")
     with pytest.raises(ValueError, match="not installed"):
         LaneSolver(method="rld", backend="cvxpy:NO_SUCH_SOLVER")
-    with pytest.raises(ValueError, match="one label per cone"):
+    with pytest.raises(ValueError, match="one class per cone"):
         solve_lane(CONES, POSE, colors=[0, 1])
     with pytest.raises(ValueError, match="unknown colour"):
-        solve_lane(CONES, POSE, colors=["blue"] * len(CONES))
+        solve_lane(CONES, POSE, colors=["purple"] * len(CONES))
     with pytest.raises(ValueError, match="one value per cone"):
         solve_lane(CONES, POSE, confidence=[0.5])
     with pytest.raises(ValueError, match=r"\[0, 1\]"):

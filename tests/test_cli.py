@@ -221,9 +221,9 @@ def test_solve_user_errors_are_one_line(tmp_path):
     # Refused by the library (a ValueError of LaneSolver), reported as one line.
     _assert_user_error(solve(str(good), "--pose", "1,0,0", "--method", "nearest", "--backend",
                              "highs"), "has no solver backends")
-    bad = _colour_csv(tmp_path / "blue.csv", labels=("blue", "yellow"), column="colour")
+    bad = _colour_csv(tmp_path / "purple.csv", labels=("purple", "yellow"), column="colour")
     _assert_user_error(solve(str(bad), "--pose", "1,0,0"),
-                       "blue.csv", "cone 110", "unknown colour 'blue'", "left, right")
+                       "purple.csv", "cone 110", "unknown colour 'purple'", "blue, orange")
     assert not (tmp_path / "l.txt").exists()
 
 

@@ -144,12 +144,13 @@ def test_the_method_sees_merged_cones_colours_and_confidence(monkeypatch):
     # Copies first, so the group's lowest index is the copy's: the lane reports it.
     copies = CONES[[0, 10]] + [[0.1, 0.0], [0.0, -0.1]]
     cones = np.vstack([copies, CONES])
-    colors = np.r_[[0, 2], np.ones(10, dtype=int), np.full(10, 2)]
+    # Class codes (rld.colors): 0 unknown, 2 blue (left), 1 yellow (right).
+    colors = np.r_[[0, 1], np.full(10, 2), np.ones(10, dtype=int)]
     conf = np.r_[[0.9, 0.1], np.full(20, 0.5)]
     lane = solver.solve(cones, POSE, colors=colors, confidence=conf)
     assert seen["points"].shape == (20, 2)
-    # Cone 0 (the copy of the first left cone, unknown) took the left label of its original;
-    # the first right cone and its copy agree on right. Confidence: the larger.
+    # Cone 0 (the copy of the first left cone, unknown) took the left side of its original;
+    # the first right cone and its copy agree on right (side labels: 1 left, 2 right).
     assert seen["colors"][:2].tolist() == [1, 2] and seen["colors"].size == 20
     assert seen["confidence"][:2].tolist() == [0.9, 0.5]
     assert lane.stats["duplicates_merged"] == 2 and lane.stats["probe"] == 1

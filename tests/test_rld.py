@@ -452,7 +452,7 @@ def test_correct_colours_keep_each_boundary_to_one_label():
     left = np.column_stack([xs, np.full(xs.size, 2.0)])
     right = np.column_stack([xs, np.full(xs.size, -2.0)])
     pts = np.vstack([left, right])
-    colors = np.array([1] * xs.size + [2] * xs.size)
+    colors = np.array(["blue"] * xs.size + ["yellow"] * xs.size)
     lane = solve_lane(pts, (1.0, 0.0, 0.0), method="rld", colors=colors, time_limit_s=5)
     assert set(lane.left) <= set(range(xs.size)) and set(lane.right) >= {xs.size + 1}
     # Every chosen edge joins cones of one label.
