@@ -975,8 +975,10 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
                 rp = grow_int(rp, K + 2)
             if K + 1 > feats.shape[0]:
                 feats = grow_rows(feats, K + 1)
-            lf[lp[K]: lp[K] + nL] = L[:nL]
-            rf[rp[K]: rp[K] + nR] = R[:nR]
+            for i in range(nL):  # loops, not slice assignments (rld.geometry_kernels.grow_int)
+                lf[lp[K] + i] = L[i]
+            for i in range(nR):
+                rf[rp[K] + i] = R[i]
             lp[K + 1] = lp[K] + nL
             rp[K + 1] = rp[K] + nR
             _features(wvL[g], wsL[g], nL, wvR[g], wsR[g], nR, Lcum, Lcum2, Ltc, Ltc2, Rcum,

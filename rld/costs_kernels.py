@@ -316,8 +316,11 @@ def reach_costs(points, lflat, lptr, rflat, rptr, px, py, hx, hy, radius, expect
         L = L[:radius_cut(points, L, px, py, radius)]
         R = R[:radius_cut(points, R, px, py, radius)]
         flat = np.empty(L.shape[0] + R.shape[0], dtype=np.int64)
-        flat[:L.shape[0]] = L
-        flat[L.shape[0]:] = R
+        nl = L.shape[0]
+        for i in range(nl):  # loops, not slice assignments (rld.geometry_kernels.grow_int)
+            flat[i] = L[i]
+        for i in range(R.shape[0]):
+            flat[nl + i] = R[i]
         ptr[0] = 0
         ptr[1] = L.shape[0]
         ptr[2] = flat.shape[0]

@@ -401,6 +401,11 @@ def polylines_touch(p, q):
 
 # ----------------------------------------------------------------------------------------------
 # Growable arrays, for kernels that do not know their output's size in advance.
+#
+# Copies between arrays are written as loops, never as ``b[:n] = a`` or ``b[i] = row``: numba
+# lowers an array-valued slice assignment with a shape check whose error message is formatted
+# by compiled string code (``raise_with_shape_context``), about 5 s of compilation on a cold
+# start for an error that cannot happen here (the shapes match by construction).
 
 
 @njit(cache=True)
@@ -409,7 +414,8 @@ def grow_int(a, need):
     if need <= a.shape[0]:
         return a
     b = np.empty(max(need, 2 * a.shape[0]), dtype=a.dtype)
-    b[: a.shape[0]] = a
+    for i in range(a.shape[0]):
+        b[i] = a[i]
     return b
 
 
@@ -419,7 +425,9 @@ def grow_rows(a, need):
     if need <= a.shape[0]:
         return a
     b = np.empty((max(need, 2 * a.shape[0]), a.shape[1]), dtype=a.dtype)
-    b[: a.shape[0]] = a
+    for i in range(a.shape[0]):
+        for j in range(a.shape[1]):
+            b[i, j] = a[i, j]
     return b
 
 
@@ -428,7 +436,9 @@ def grow_2d(a, rows, cols):
     """``a`` copied into the top-left corner of a new (rows, cols) array (rows, cols at least
     ``a``'s; the rest uninitialised)."""
     b = np.empty((rows, cols), dtype=a.dtype)
-    b[: a.shape[0], : a.shape[1]] = a
+    for i in range(a.shape[0]):
+        for j in range(a.shape[1]):
+            b[i, j] = a[i, j]
     return b
 
 
@@ -621,10 +631,13 @@ def start_pairs_ranked(pts, px, py, c, s, radius, k, min_width, max_behind):
             # Insert in order, dropping the last when full.
             j = m if m < kk else kk - 1
             while j > 0 and _pair_before(key, keys[j - 1]):
-                keys[j] = keys[j - 1]
-                out[j] = out[j - 1]
+                for q in range(6):  # loops, not row assignments (see grow_int)
+                    keys[j, q] = keys[j - 1, q]
+                out[j, 0] = out[j - 1, 0]
+                out[j, 1] = out[j - 1, 1]
                 j -= 1
-            keys[j] = key
+            for q in range(6):
+                keys[j, q] = key[q]
             out[j, 0] = li[a]
             out[j, 1] = ri[b]
             if m < kk:
