@@ -113,7 +113,26 @@ def pairs_within(points: np.ndarray, r: float) -> np.ndarray:
         raise ValueError(f"the radius must be a positive number of metres, got {r!r}")
     if not np.all(np.isfinite(points)):
         raise ValueError("every point must be finite")
-    return gk.pairs_within(points, float(r))
+    r = float(r)
+    pairs, done = gk.pairs_within(points, r)
+    if done:
+        return pairs
+    # A spread too wide for a dense grid: cells numbered by the rank of their column and row
+    # among the occupied ones, so any spread of finite coordinates works (numpy's sort here,
+    # not numba's, which would cost every cold start its compilation).
+    cell = r * gk.GRID_SLACK
+    axes = []
+    for f in (np.floor(points[:, 0] / cell), np.floor(points[:, 1] / cell)):
+        u = np.unique(f)
+        nbr = np.full((f.size, 3), -1, dtype=np.int64)
+        for d in range(3):
+            t = np.searchsorted(u, f + (d - 1))
+            hit = t < u.size
+            hit[hit] = u[t[hit]] == f[hit] + (d - 1)
+            nbr[hit, d] = t[hit]
+        axes.append((np.searchsorted(u, f).astype(np.int64), u.size, nbr))
+    (col, ncol, nx), (row, w, ny) = axes
+    return gk.pairs_in_cells(points, r, col, row, ncol, w, nx, ny)
 
 
 def segments_cross(a0, a1, b0, b1) -> np.ndarray:

@@ -458,71 +458,70 @@ def _insertion_sort(a, k):
         a[j + 1] = v
 
 
-@njit(cache=True)
-def _axis_neighbours(dense, idx, f, size, u):
-    """For every point, the grid columns (or rows) one step below, level and one step above its
-    own, (n, 3), -1 where there is none: in a dense grid the indices ``idx - 1 .. idx + 1``
-    inside ``size``; otherwise the ranks of the floor values ``f - 1 .. f + 1`` among the
-    occupied ones ``u`` (-1 when unoccupied)."""
-    n = idx.shape[0]
-    out = np.full((n, 3), -1, dtype=np.int64)
-    for i in range(n):
-        for d in range(3):
-            if dense:
-                t = idx[i] + d - 1
-                if 0 <= t < size:
-                    out[i, d] = t
-            else:
-                t = np.searchsorted(u, f[i] + d - 1)
-                if t < size and u[t] == f[i] + d - 1:
-                    out[i, d] = t
-    return out
+#: ``pairs_within``'s cells are ``r * GRID_SLACK`` wide, a hair wider than r: two points within
+#: r of each other are then in the same or adjacent cells even where x / r rounds across a
+#: cell's edge.
+GRID_SLACK = 1.0 + 1e-9
 
 
 @njit(cache=True)
 def pairs_within(pts, r):
     """Every pair (i, j), i < j, of the points ``pts`` (n, 2) at most ``r`` apart
-    (``math.hypot``), as an (E, 2) int64 array sorted by i, then j. A grid of cells ``r``
-    wide (a hair wider): each point is compared with the points of its own cell and the eight
-    around it.
-    The grid is a dense array when it has at most 16 n + 4096 cells (any map of a track);
-    otherwise cells are numbered by the rank of their column and row among the occupied
-    ones, so any spread of finite coordinates works. ``r`` > 0 and finite (the callers
-    validate it)."""
+    (``math.hypot``), as an (E, 2) int64 array sorted by i, then j, and True; or, when the
+    grid below would be too large, an empty array and False (``rld.geometry.pairs_within``
+    then numbers the cells itself and calls ``pairs_in_cells``).
+    A grid of cells ``r`` wide (a hair wider): each point is compared with the points of its
+    own cell and the eight around it. The grid is a dense array when it has at most
+    16 n + 4096 cells (any map of a track). ``r`` > 0 and finite (the callers validate it).
+    The sparse case is left to numpy so that a cold start does not compile numba's sort and
+    ``np.unique`` for a case no track map reaches."""
     n = pts.shape[0]
     if n < 2:
-        return np.empty((0, 2), dtype=np.int64)
-    # Cells a hair wider than r: two points within r of each other are then in the same or
-    # adjacent cells even where x / r rounds across a cell's edge.
-    cell = r * (1.0 + 1e-9)
+        return np.empty((0, 2), dtype=np.int64), True
+    cell = r * GRID_SLACK
     fx = np.empty(n)
     fy = np.empty(n)
     for i in range(n):
         fx[i] = math.floor(pts[i, 0] / cell)
         fy[i] = math.floor(pts[i, 1] / cell)
-    x0, x1, y0, y1 = fx.min(), fx.max(), fy.min(), fy.max()
-    dense = (x1 - x0 + 1.0) * (y1 - y0 + 1.0) <= 16.0 * n + 4096.0
-    if dense:
-        # Column and row from 0; a cell's key is col * w + row.
-        w = int(y1 - y0) + 1
-        ncol = int(x1 - x0) + 1
-        col = np.empty(n, dtype=np.int64)
-        row = np.empty(n, dtype=np.int64)
-        for i in range(n):
-            col[i] = int(fx[i] - x0)
-            row[i] = int(fy[i] - y0)
-        ux = fx  # unused by a dense grid
-        uy = fy
-    else:
-        ux = np.unique(fx)
-        uy = np.unique(fy)
-        w = uy.size
-        ncol = ux.size
-        col = np.searchsorted(ux, fx)
-        row = np.searchsorted(uy, fy)
+    x0 = x1 = fx[0]
+    y0 = y1 = fy[0]
+    for i in range(1, n):
+        if fx[i] < x0:
+            x0 = fx[i]
+        if fx[i] > x1:
+            x1 = fx[i]
+        if fy[i] < y0:
+            y0 = fy[i]
+        if fy[i] > y1:
+            y1 = fy[i]
+    if not (x1 - x0 + 1.0) * (y1 - y0 + 1.0) <= 16.0 * n + 4096.0:
+        return np.empty((0, 2), dtype=np.int64), False
+    # Column and row from 0; a cell's key is col * w + row.
+    w = int(y1 - y0) + 1
+    ncol = int(x1 - x0) + 1
+    col = np.empty(n, dtype=np.int64)
+    row = np.empty(n, dtype=np.int64)
+    nx = np.full((n, 3), -1, dtype=np.int64)
+    ny = np.full((n, 3), -1, dtype=np.int64)
+    for i in range(n):
+        col[i] = int(fx[i] - x0)
+        row[i] = int(fy[i] - y0)
+        for d in range(3):
+            if 0 <= col[i] + d - 1 < ncol:
+                nx[i, d] = col[i] + d - 1
+            if 0 <= row[i] + d - 1 < w:
+                ny[i, d] = row[i] + d - 1
+    return pairs_in_cells(pts, r, col, row, ncol, w, nx, ny), True
+
+
+@njit(cache=True)
+def pairs_in_cells(pts, r, col, row, ncol, w, nx, ny):
+    """``pairs_within`` on a numbered grid: point i lies in column ``col[i]`` (of ``ncol``)
+    and row ``row[i]`` (of ``w``); ``nx[i]`` ((3,), -1 for none) are the columns one step
+    below, level and one step above its own, ``ny[i]`` the rows likewise."""
+    n = pts.shape[0]
     ncell = ncol * w
-    nx = _axis_neighbours(dense, col, fx, ncol, ux)
-    ny = _axis_neighbours(dense, row, fy, w, uy)
     # Counting sort of the points by cell: cell c holds order[start[c]:start[c + 1]].
     start = np.zeros(ncell + 1, dtype=np.int64)
     for i in range(n):
