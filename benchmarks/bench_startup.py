@@ -9,7 +9,8 @@ imports ``rld`` and calls ``solve_lane``, as a car's process would (building a f
 ``rld.simulation`` compiles kernels of its own and would blur the split).
 
 Reported per method, median over ``repeats``: whole-process wall time (interpreter start-up
-included), and inside it the time to import ``rld`` and the time of the first ``solve_lane``.
+included) and CPU time (user + system, steadier than the wall time on a busy machine), and
+inside the wall time the time to import ``rld`` and the time of the first ``solve_lane``.
 
     python -m benchmarks.bench_startup [--repeats 3] [--methods rld,rld-incremental,clc,huang]
     python -m benchmarks.bench_startup --latency 50   # steady state: median of 50 solves
@@ -24,6 +25,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -73,18 +75,23 @@ def frame() -> dict:
 def run_once(method: str, cache: str, data: dict) -> dict[str, float]:
     """One fresh process solving ``data`` once with ``method`` and kernel cache ``cache``."""
     code = CHILD.format(method=method, cones=data["cones"], pose=data["pose"])
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     out = subprocess.run([sys.executable, "-c", code],
                          env=_child_env(cache), capture_output=True, text=True, check=True)
     wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     row = json.loads(out.stdout.strip().splitlines()[-1])
     row["wall"] = wall
+    # CPU seconds (user + system) of the child: on a busy machine the wall time grows with
+    # the other processes' load, the CPU time much less.
+    row["cpu"] = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return row
 
 
 def run(methods=METHODS, repeats: int = 3) -> dict[str, dict[str, dict[str, float]]]:
     """``{method: {"cold": {...}, "warm": {...}}}``, each the median over ``repeats`` of
-    ``wall``, ``import`` and ``solve`` seconds; prints a Markdown table."""
+    ``wall``, ``cpu``, ``import`` and ``solve`` seconds; prints a Markdown table."""
     data = frame()
     result: dict[str, dict[str, dict[str, float]]] = {}
     for m in methods:
@@ -95,16 +102,16 @@ def run(methods=METHODS, repeats: int = 3) -> dict[str, dict[str, dict[str, floa
                 runs["warm"].append(run_once(m, cache, data))
         result[m] = {
             phase: {k: statistics.median(r[k] for r in rows)
-                    for k in ("wall", "import", "solve")}
+                    for k in ("wall", "cpu", "import", "solve")}
             for phase, rows in runs.items()
         }
-    print(f"| method | cold wall s | cold import s | cold solve s | warm wall s "
-          f"| warm import s | warm solve s |  (median of {repeats})")
-    print("|---|---:|---:|---:|---:|---:|---:|")
+    print(f"| method | cold wall s | cold CPU s | cold import s | cold solve s | warm wall s "
+          f"| warm CPU s | warm import s | warm solve s |  (median of {repeats})")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     for m, r in result.items():
         c, w = r["cold"], r["warm"]
-        print(f"| {m} | {c['wall']:.2f} | {c['import']:.2f} | {c['solve']:.2f} "
-              f"| {w['wall']:.2f} | {w['import']:.2f} | {w['solve']:.2f} |")
+        print(f"| {m} | {c['wall']:.2f} | {c['cpu']:.2f} | {c['import']:.2f} | {c['solve']:.2f} "
+              f"| {w['wall']:.2f} | {w['cpu']:.2f} | {w['import']:.2f} | {w['solve']:.2f} |")
     return result
 
 
