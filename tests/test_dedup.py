@@ -3,9 +3,11 @@
 
 The bug: with every cone of a map doubled, RLD's lane was about half as long (its 20-cone
 window took ten cones twice, and its spacing cost excludes the 0-0.39 m edges between a cone
-and its copy), measured 2026-12 on ``generate_track(100)``, frame 20: 10 + 10 cones, 61.0 m,
-against 5 + 5 cones, 28.7 m; CLC kept its length but with 5 cm jitter zigzagged through both
-copies (16 + 17 -> 20 + 23 cones). Now duplicates are merged first and the lanes agree.
+and its copy), measured 2026-12-06 on ``generate_track(100)``, R = 50 m, frame 20: 8 + 7
+cones, 42.4 m of boundary, against 5 + 5 cones, 25.4 m (on the generator before issue 39:
+10 + 10, 61.0 m against 5 + 5, 28.7 m); CLC kept its length but with 5 cm jitter zigzagged
+through both copies (16 + 17 -> 20 + 23 cones, the earlier generator). Now duplicates are
+merged first and the lanes agree.
 """
 
 from __future__ import annotations

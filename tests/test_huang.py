@@ -82,17 +82,19 @@ def test_straight_clean_lane_is_found_exactly():
 
 
 def test_baseline_solves_a_clean_generated_track():
-    # Measured 2026-11-25: 85 % of these poses without a critical failure (15 % critical), the
-    # floor below leaves a margin; a single parabola cannot follow a hairpin.
+    # Measured 2026-12-06 (the generator of issue 39): of 38 poses, 3 critical by the
+    # geometric rule at 0.5 m (4 by the index rule), and 26 too short: a single parabola
+    # cannot follow the tighter corners far. The bounds leave a pose or two of margin.
     lap = simulate_lap(generate_track(100), range_m=30.0, fp_rate=0.0, seed=0)
-    cats = []
+    scores = []
     for k in range(0, len(lap), 10):
         f = lap.frame(k)
         lane = solve_lane(f.cones, f.pose, method="huang")
-        cats.append(score_lane(f, lane.left, lane.right, lane.ok, lane.closed).category)
-    critical = sum(c in ("diverging_lt20", "failed") for c in cats)
-    assert critical <= 0.25 * len(cats), cats
-    assert sum(c in ("gt", "near_gt") for c in cats) >= 0.4 * len(cats), cats
+        scores.append(score_lane(f, lane.left, lane.right, lane.ok, lane.closed))
+    n = len(scores)
+    assert sum(s.critical_at(0.5) for s in scores) <= 0.15 * n
+    assert sum(s.critical for s in scores) <= 0.15 * n
+    assert sum(s.too_short for s in scores) <= 0.8 * n
 
 
 def test_no_lane_far_from_the_cones():

@@ -143,12 +143,14 @@ def test_a_frontier_window_with_no_room_to_grow_is_refused():
 
 @pytest.mark.parametrize("fp_rate", [0.0, 0.2])
 def test_lanes_follow_the_truth_on_generated_tracks(fp_rate):
-    # Measured 2026-11-25 (R = 50 m, every pose): 0 critical poses after the first two at 0 %
-    # on this track; the bound leaves a margin for the false positives.
-    cats = [score_lane(f, lane.left, lane.right, lane.ok, lane.closed).category_tolerant
-            for k, f, lane, _ in drive(100, fp_rate=fp_rate) if k >= 2]
-    critical = sum(c in ("diverging_lt20", "failed") for c in cats)
-    assert critical <= 0.05 * len(cats)
+    # Measured 2026-12-06 (R = 50 m, every pose after the first two, the generator of issue
+    # 39): geometric critical at 1 m 0 of 371 poses at 0 % and 20 % false positives, at 0.5 m
+    # 0 and 22 (5.9 %); the bounds leave a few poses of margin.
+    scores = [score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
+              for k, f, lane, _ in drive(100, fp_rate=fp_rate) if k >= 2]
+    n = len(scores)
+    assert sum(s.critical_at(1.0) for s in scores) <= 0.01 * n
+    assert sum(s.critical_at(0.5) for s in scores) <= (0.01 if fp_rate == 0 else 0.07) * n
 
 
 # --- the whole kept lane stays a lane ------------------------------------------------------
