@@ -1009,5 +1009,186 @@ def bench_clc_judge(source: str, tracks: list[int] | None, cells: str, seeds: li
     _emit(mod.to_markdown(result), out)
 
 
+@bench.command("generator")
+@click.option("--sets", default="choosing,reporting", show_default=True,
+              help="Comma-separated generated sets (rld.generator.generated_set): choosing, "
+                   "reporting.")
+@click.option("--clc/--no-clc", "with_clc", default=False, show_default=True,
+              help="Also CLC's geometric critical rates on the shared tracks and on the first "
+                   "set (a few minutes).")
+@click.option("--spread", "spread_blocks", default=0, show_default=True,
+              type=click.IntRange(min=0),
+              help="Also the KS statistics of this many further sets of 32 generated tracks "
+                   "(seeds 4000 on), a count: how much a set's figure owes to luck.")
+@click.option("--range-m", default=30.0, show_default=True, type=_METRES,
+              help="CLC: perception range, metres.")
+@click.option("--fp-rates", default="0,0.3", show_default=True, type=_RATES,
+              help="CLC: " + _FP_RATES_HELP)
+@click.option("--every", default=4, show_default=True, type=_COUNT,
+              help="CLC: " + _EVERY_HELP)
+@click.option("--plot", "plot_path", default=None, metavar="FILE", callback=_image_file,
+              show_default="none",
+              help="Also draw the empirical CDFs (2 x 2) to this picture (PNG).")
+@click.option("--out", default=None, metavar="FILE", callback=_out_file, show_default="none",
+              help=_OUT_MD_HELP)
+def bench_generator(sets: str, with_clc: bool, spread_blocks: int, range_m: float,
+                    fp_rates: list[float], every: int, plot_path: str | None,
+                    out: str | None) -> None:
+    """Do the generated tracks resemble the shared ones? Cone spacing, lane width, turn per
+    cone and position noise side by side, with two-sample KS statistics
+    (benchmarks/bench_generator.py)."""
+    names = [s.strip() for s in sets.split(",") if s.strip()]
+    if not names or set(names) - {"choosing", "reporting"}:
+        raise click.BadParameter(f"{sets!r}: use choosing, reporting or both",
+                                 param_hint="'--sets'")
+    mod = _benchmark_module("bench_generator")
+    try:
+        result = mod.run(names)
+        parts = [mod.to_markdown(result)]
+        if spread_blocks:
+            spread = mod.spread(4000, spread_blocks, 32, shared=result["shared"])
+            parts.append(mod.spread_markdown(spread, 4000, 32))
+        if with_clc:
+            from rld.generator import generated_set
+
+            shared = mod.clc_rates(mod.shared_tracks(), range_m=range_m, fp_rates=fp_rates,
+                                   every=every)
+            generated = mod.clc_rates(generated_set(names[0]), range_m=range_m,
+                                      fp_rates=fp_rates, every=every)
+            parts.append(mod.clc_markdown(shared, generated, range_m, names[0]))
+    except FileNotFoundError as exc:
+        raise UserError(str(exc)) from exc
+    _emit("\n\n".join(parts), out)
+    if plot_path:
+        try:
+            mod.plot(result, plot_path)
+        except OSError as exc:
+            raise UserError(_os_error(exc)) from exc
+        click.echo(f"wrote {plot_path}")
+
+
+def _mcap_out(ctx, param, value):
+    """Callback of ``rld replay --out``: a writable ``.mcap`` file."""
+    value = _out_file(ctx, param, value)
+    if value is not None and Path(value).suffix.lower() != ".mcap":
+        raise click.BadParameter(f"{value}: expected an .mcap file", ctx=ctx, param=param)
+    return value
+
+
+def _transform_option(ctx, param, value):
+    """Callback of ``--transform PARENT,CHILD,X,Y,YAW``: a ``FrameTransform``."""
+    if value is None:
+        return None
+    from rld.ros.convert import FrameTransform
+
+    try:
+        return FrameTransform.parse(value)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), ctx=ctx, param=param) from exc
+
+
+@main.command()
+@click.argument("in_path", metavar="IN", type=click.Path(exists=True))
+@click.option("--cones", "cones_topic", required=True, metavar="TOPIC",
+              help="Topic of the cone map: eufs_msgs/msg/ConeArrayWithCovariance (or "
+                   "eufs_msgs/msg/ConeArray, geometry_msgs/msg/PoseArray, "
+                   "geometry_msgs/msg/PolygonStamped); positions in metres.")
+@click.option("--pose", "pose_topic", required=True, metavar="TOPIC",
+              help="Topic of the car's pose: nav_msgs/msg/Odometry, "
+                   "geometry_msgs/msg/PoseStamped or geometry_msgs/msg/PoseWithCovarianceStamped.")
+@click.option("--out", required=True, metavar="OUT.mcap", callback=_mcap_out,
+              help="The MCAP to write: the two input topics as recorded and the lanes.")
+@click.option("--method", type=click.Choice(sorted(METHODS)), default=DEFAULT_METHOD,
+              show_default=True, help=_METHOD_HELP)
+@click.option("--backend", default=None, callback=_backends_option,
+              show_default="auto: CP-SAT or HiGHS by the program's size",
+              help="Solver backend of the RLD methods: auto, cpsat, highs, cvxpy or "
+                   "cvxpy:SOLVER.")
+@click.option("--time-limit", "time_limit_s", type=_SECONDS, default=None,
+              show_default="the method's: 0.4 s for RLD; CLC is bounded by max_iterations",
+              help="Time budget of each solve, seconds.")
+@click.option("--param", "param_items", multiple=True, metavar="NAME=VALUE",
+              help="Override a LaneParams field, NAME=VALUE (repeatable; the field's unit is in "
+                   "its name, e.g. --param max_cone_spacing_m=6.0).")
+@click.option("--spacing", "spacing_m", default=0.5, show_default=True, type=_METRES,
+              help="Spacing of the centreline path's poses, metres.")
+@click.option("--transform", default=None, metavar="PARENT,CHILD,X,Y,YAW",
+              callback=_transform_option, show_default="none: the pose and the cones in one frame",
+              help="Fixed transform between the pose's and the cones' frames: the pose of frame "
+                   "CHILD in frame PARENT, x and y in metres, yaw in radians (either way round).")
+@click.option("--out-ns", default="/rld", show_default=True, metavar="NAMESPACE",
+              help="Namespace of the lane topics: NAMESPACE/centerline, /left, /right "
+                   "(nav_msgs/msg/Path) and /markers (visualization_msgs/msg/MarkerArray).")
+@click.option("--plot", "plot_path", default=None, metavar="FILE", callback=_image_file,
+              show_default="none",
+              help="Also draw a lap overview into this picture (PNG, or another format by "
+                   "suffix).")
+def replay(in_path: str, cones_topic: str, pose_topic: str, out: str, method: str,
+           backend: str | None, time_limit_s: float | None, param_items: tuple[str, ...],
+           spacing_m: float, transform, out_ns: str, plot_path: str | None) -> None:
+    """Replay a recorded drive: the lane at every map message of IN, written to an MCAP.
+
+    IN is a ROS 2 bag: a rosbag2 folder (MCAP or sqlite3) or a bare .mcap or .db3 file. At
+    every message on --cones, one solver finds the lane ahead of the latest --pose logged at or
+    before it. --out gets both input topics and, under --out-ns, the centreline, the two
+    boundaries and markers; Foxglove opens it, and rviz2 shows it through ros2 bag play.
+    Skipped messages (no cones, no pose yet, an unknown type, a truncated bag) are logged and
+    counted in the summary. Needs pip install 'rld-lanes[ros]' (docs/ros.md)."""
+    import importlib.util
+
+    missing = [m for m in ("rosbags", "mcap") if importlib.util.find_spec(m) is None]
+    if missing:
+        raise UserError(f"rld replay needs {' and '.join(missing)}: pip install "
+                        "'rld-lanes[ros]'")
+    from tqdm import tqdm
+
+    from rld.ros.bag import BagError
+    from rld.ros.convert import FrameMismatch
+    from rld.ros.replay import check_namespace
+    from rld.ros.replay import replay as run_replay
+
+    params = _params(param_items)
+    try:
+        check_namespace(out_ns)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="'--out-ns'") from exc
+    if Path(out).resolve() == Path(in_path).resolve():
+        raise click.BadParameter(f"{out} is the input bag", param_hint="'--out'")
+
+    def log(line: str) -> None:
+        tqdm.write(f"rld replay: {line}", file=sys.stderr)
+
+    try:
+        result = run_replay(in_path, out, cones_topic, pose_topic, method=method, params=params,
+                            backend=backend, spacing_m=spacing_m, time_limit_s=time_limit_s,
+                            transform=transform, out_ns=out_ns, progress=True, log=log)
+    except FrameMismatch as exc:
+        raise UserError(f"{in_path}: {exc} (--transform)") from exc
+    except BagError as exc:
+        raise UserError(str(exc)) from exc
+    except OSError as exc:
+        raise UserError(_os_error(exc)) from exc
+    except ValueError as exc:
+        raise UserError(str(exc)) from exc
+    s = result.stats
+    click.echo(f"bag         {in_path}: {cones_topic} (maps), {pose_topic} (poses)"
+               + (f"; ended early: {result.problem}" if result.problem else ""))
+    click.echo(f"method      {method}" + (f" (backend {backend})" if backend else ""))
+    click.echo(s.summary())
+    click.echo(f"output      {out}: {result.written} messages; lanes on "
+               + ", ".join(result.topics.values()))
+    if plot_path:
+        from rld.ros.plot import plot_replay
+
+        try:
+            plot_replay(result, plot_path,
+                        title=f"{method} replay of {Path(in_path).name}: {s.maps} maps, "
+                              f"{s.found} lanes found, {sum(s.not_found.values())} not found, "
+                              f"{sum(s.skipped.values())} skipped")
+        except OSError as exc:
+            raise UserError(_os_error(exc)) from exc
+        click.echo(f"plot        {plot_path}")
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()
