@@ -1,4 +1,5 @@
-"""The ``rld`` command line: ``rld demo``, ``rld solve``, ``rld eval``, ``rld bench ...``.
+"""The ``rld`` command line: ``rld demo``, ``rld solve``, ``rld warmup``, ``rld eval``,
+``rld replay``, ``rld bench ...``.
 
 A user error (a value out of range, a file that cannot be read or written, a map not in its
 format, input the library refuses) ends the command with one line naming the problem and exit
@@ -473,6 +474,37 @@ def solve(map_path: str, pose: Pose, method: str, backend: str | None,
         click.echo(f"plot        {plot_path}")
     if not lane.ok:
         sys.exit(1)
+
+
+@main.command()
+@click.option("--methods", default=None, show_default="all methods",
+              help="Comma-separated methods: " + ", ".join(sorted(METHODS)) + ".")
+@click.option("--quiet", is_flag=True, help="No progress bar; off by default.")
+def warmup(methods: str | None, quiet: bool) -> None:
+    """Compile every kernel of the methods into the kernel cache now (a car's start-up or
+    install script), so that the first solve of a later process only loads it."""
+    from tqdm import tqdm
+
+    from rld._jit import cache_dir
+    from rld.warmup import FRAMES
+    from rld.warmup import warmup as run_warmup
+
+    names = [m.strip() for m in methods.split(",") if m.strip()] if methods else sorted(METHODS)
+    bad = [m for m in names if m not in METHODS]
+    if bad:
+        raise click.BadParameter(f"unknown methods {bad}; available: {', '.join(sorted(METHODS))}",
+                                 param_hint="--methods")
+    steps = len(names) * sum(frame[3] for frame in FRAMES)
+    t0 = time.perf_counter()
+    with tqdm(total=steps, unit="frame", disable=quiet, leave=False) as bar:
+        def step(method: str) -> None:
+            bar.set_description(method)
+            bar.update()
+
+        seconds = run_warmup(names, progress=step)
+    for m, s in seconds.items():
+        click.echo(f"{m:<16} {s:6.1f} s")
+    click.echo(f"kernel cache {cache_dir()} ({time.perf_counter() - t0:.1f} s in all)")
 
 
 def _emit(text: str, out: str | None) -> None:

@@ -409,3 +409,20 @@ def test_bench_rld_paper_refuses_bad_params(item, message):
     result = CliRunner().invoke(main, ["bench", "rld-paper", "--poses", "1", "--seeds", "0",
                                        "--param", item])
     assert result.exit_code != 0 and message in result.output, result.output
+
+
+def test_warmup_compiles_a_method_and_reports_it():
+    # nearest and huang: the two methods whose kernels compile in seconds.
+    result = CliRunner().invoke(main, ["warmup", "--methods", "nearest,huang", "--quiet"])
+    assert result.exit_code == 0, result.output
+    assert "nearest" in result.output and "huang" in result.output
+    assert "kernel cache" in result.output
+
+
+def test_warmup_rejects_an_unknown_method():
+    result = CliRunner().invoke(main, ["warmup", "--methods", "rld,bogus"])
+    assert result.exit_code != 0 and "bogus" in result.output
+    from rld.warmup import warmup
+
+    with pytest.raises(ValueError, match="bogus"):
+        warmup(["bogus"])
