@@ -1099,6 +1099,30 @@ def bench_generator(sets: str, with_clc: bool, spread_blocks: int, range_m: floa
         click.echo(f"wrote {plot_path}")
 
 
+@bench.command("startup")
+@click.option("--methods", default="rld,rld-incremental,clc,huang", show_default=True,
+              help="Comma-separated methods.")
+@click.option("--repeats", default=3, show_default=True, type=_COUNT,
+              help="Fresh processes per method and phase (cold and warm), a count.")
+@click.option("--latency", "n_latency", default=0, show_default=True,
+              type=click.IntRange(min=0),
+              help="Instead: the median of this many warm solves per method, a count.")
+def bench_startup(methods: str, repeats: int, n_latency: int) -> None:
+    """Start-up per method (issue 42): a fresh process's import and first solve with an empty
+    kernel cache (cold) and with the cache it left (warm), seconds
+    (benchmarks/bench_startup.py)."""
+    names = [m.strip() for m in methods.split(",") if m.strip()]
+    bad = [m for m in names if m not in METHODS]
+    if bad or not names:
+        raise click.BadParameter(f"unknown methods {bad}; available: {', '.join(sorted(METHODS))}",
+                                 param_hint="'--methods'")
+    mod = _benchmark_module("bench_startup")
+    if n_latency:
+        mod.latency(names, n_latency)
+    else:
+        mod.run(names, repeats)
+
+
 def _mcap_out(ctx, param, value):
     """Callback of ``rld replay --out``: a writable ``.mcap`` file."""
     value = _out_file(ctx, param, value)
