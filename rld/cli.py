@@ -393,6 +393,17 @@ def demo(seed: int, fp_rate: float, range_m: float, method: str, out: str) -> No
     click.echo(f"plot        {out}")
 
 
+#: The options ``rld solve`` and ``rld replay`` share.
+_BACKEND_OPTION = click.option(
+    "--backend", default=None, callback=_backends_option,
+    show_default="auto: CP-SAT or HiGHS by the program's size",
+    help="Solver backend of the RLD methods: auto, cpsat, highs, cvxpy or cvxpy:SOLVER.")
+_TIME_LIMIT_OPTION = click.option(
+    "--time-limit", "time_limit_s", type=_SECONDS, default=None,
+    show_default="the method's: 0.4 s for RLD; CLC is bounded by max_iterations",
+    help="Time budget of each solve, seconds.")
+
+
 @main.command()
 @click.argument("map_path", metavar="MAP", type=click.Path(exists=True, dir_okay=False))
 @click.option("--pose", required=True, callback=_pose_option, metavar="X,Y,YAW",
@@ -400,13 +411,8 @@ def demo(seed: int, fp_rate: float, range_m: float, method: str, out: str) -> No
                    "counter-clockwise), e.g. -1.5,2,0.3.")
 @click.option("--method", type=click.Choice(sorted(METHODS)), default=DEFAULT_METHOD,
               show_default=True, help=_METHOD_HELP)
-@click.option("--backend", default=None, callback=_backends_option,
-              show_default="auto: CP-SAT or HiGHS by the program's size",
-              help="Solver backend of the RLD methods: auto, cpsat, highs, cvxpy or "
-                   "cvxpy:SOLVER.")
-@click.option("--time-limit", "time_limit_s", type=_SECONDS, default=None,
-              show_default="the method's: 0.4 s for RLD; CLC is bounded by max_iterations",
-              help="Time budget of the solve, seconds.")
+@_BACKEND_OPTION
+@_TIME_LIMIT_OPTION
 @click.option("--param", "param_items", multiple=True, metavar="NAME=VALUE", help=_PARAM_HELP)
 @click.option("--out", default=None, metavar="FILE", callback=_lane_file, show_default="none",
               help="Write the lane to this file, by suffix: .json (method, status, message, "
@@ -1156,16 +1162,9 @@ def _transform_option(ctx, param, value):
               help="The MCAP to write: the two input topics as recorded and the lanes.")
 @click.option("--method", type=click.Choice(sorted(METHODS)), default=DEFAULT_METHOD,
               show_default=True, help=_METHOD_HELP)
-@click.option("--backend", default=None, callback=_backends_option,
-              show_default="auto: CP-SAT or HiGHS by the program's size",
-              help="Solver backend of the RLD methods: auto, cpsat, highs, cvxpy or "
-                   "cvxpy:SOLVER.")
-@click.option("--time-limit", "time_limit_s", type=_SECONDS, default=None,
-              show_default="the method's: 0.4 s for RLD; CLC is bounded by max_iterations",
-              help="Time budget of each solve, seconds.")
-@click.option("--param", "param_items", multiple=True, metavar="NAME=VALUE",
-              help="Override a LaneParams field, NAME=VALUE (repeatable; the field's unit is in "
-                   "its name, e.g. --param max_cone_spacing_m=6.0).")
+@_BACKEND_OPTION
+@_TIME_LIMIT_OPTION
+@click.option("--param", "param_items", multiple=True, metavar="NAME=VALUE", help=_PARAM_HELP)
 @click.option("--spacing", "spacing_m", default=0.5, show_default=True, type=_METRES,
               help="Spacing of the centreline path's poses, metres.")
 @click.option("--transform", default=None, metavar="PARENT,CHILD,X,Y,YAW",
