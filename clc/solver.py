@@ -381,11 +381,11 @@ class ClcModel:
         Measured 2026-12-02 on the six shared tracks, seeds 0-2 pooled, tolerant critical %
         at 0 / 10 / 30 % false positives: whole lanes R = 30 m 0.58 / 2.40 / 8.39, R = 50 m
         0.07 / 0.27 / 2.50; within 25 m 0.36 / 2.09 / 7.25 and 0.07 / 0.27 / 2.21 (docs/clc.md
-        for the radii and cuts tried). When a dive's lane wins, its own close calls are
-        revisited in the next round (up to DIVE_ROUNDS): a lane two close calls away from the
-        winner, where neither change alone is feasible, is reached in two steps. A close call
-        is identified by the path up to and with its cone and the other boundary, and is never
-        revisited twice.
+        at commit 933288e for the radii and cuts tried). When a dive's lane wins, its own close
+        calls are revisited in the next round (up to DIVE_ROUNDS): a lane two close calls away
+        from the winner, where neither change alone is feasible, is reached in two steps. A
+        close call is identified by the path up to and with its cone and the other boundary,
+        and is never revisited twice.
         A winner that stops short of the map (``_short``, SHORT_LANE_M) also has every choice
         within the reach revisited in that round, each of these dives rebuilding the other
         boundary from beside the choice (``contested_dives(..., cut_other=True)``).
@@ -483,7 +483,8 @@ class ClcModel:
             winner, cost = best, best_cost
         counts["dive_rounds"] = rounds
         # Outward drops, after the rounds: offered within them, a drop that wins a round sends
-        # the next round's dives elsewhere, and the lanes they reach were worse (docs/clc.md).
+        # the next round's dives elsewhere, and the lanes they reach were worse (docs/clc.md at
+        # commit 933288e).
         for _ in range(OUTWARD_DROP_PASSES):
             if winner[2] or time.perf_counter() > deadline:
                 break

@@ -97,7 +97,8 @@ def width_roughness(left_xy: np.ndarray, right_xy: np.ndarray) -> float:
     straight boundary of a 4 m lane adds 1 + 4 + 1 = 6 m^2 on its own side, plus the change it
     makes to the other side's lengths. A side of fewer than 3 cones, or facing fewer than 2,
     adds 0. Measured against counting only the cones beside the other boundary
-    (``overlap_widths``' pairing), this form did better on the shared tracks (docs/clc.md).
+    (``overlap_widths``' pairing), this form did better on the shared tracks (docs/clc.md at commit
+    933288e).
     ``left_xy``, ``right_xy``: (n, 2) and (m, 2), metres, each ordered from the car forward.
     CLC's dive judge (``clc.solver.dive_cost``) adds ``LaneParams.w_width_roughness`` times it
     to RLD's objective: a false positive 0.6-1.5 m beside a true cone makes a line as smooth
