@@ -110,16 +110,10 @@ def width_roughness(left_xy: np.ndarray, right_xy: np.ndarray) -> float:
 
 def turn_roughness(xy: np.ndarray) -> float:
     """How unevenly a boundary turns from cone to cone, rad^2 (ours, not in either paper): the
-    signed turn at every interior cone of the open polyline ``xy`` ((n, 2), metres, in order;
-    the shared kernel ``geometry_kernels.turn_angle``, as in C_seg and eq. 20), and the sum
-    of the squared differences of consecutive turns. 0 for a straight line or a circle
-    through evenly spaced cones. A false positive ``h`` metres beside the middle of a
-    straight edge of length 2 ``s``, taken into the boundary, turns it by +d, -2 d, +d with
-    d = atan(h / s): 18 d^2 from the three cones alone, 2 d^2 more from the two neighbours'
-    turns beside them (``h`` = 0.6 m, ``s`` = 2.5 m: 1.1 rad^2), where RLD's angle cost
-    (eq. 20, (|turn| / theta_t)^4) charges a 0.47 rad turn almost nothing. A real boundary
-    changes its turn gradually (the six shared tracks: a median of 0.02 rad^2 per cone, 99 %
-    below 0.66). Fewer than 4 cones give 0."""
+    sum of squared differences of consecutive signed turns (``geometry_kernels.turn_angle``, as
+    in C_seg and eq. 20) along the open polyline ``xy`` ((n, 2), metres). 0 for a line or an
+    evenly coned circle; a false positive beside a straight edge zigzags it (docs/tuning.md
+    #w_turn_roughness). Fewer than 4 cones give 0."""
     P = np.ascontiguousarray(xy, dtype=np.float64).reshape(-1, 2)
     return float(ck.turn_roughness(P))
 

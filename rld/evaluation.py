@@ -266,17 +266,9 @@ def lap_interval(records: Iterable[PoseRecord], tolerant: bool = True, level: fl
                  geometric_m: float | None = None) -> tuple[float, float]:
     """A percentile bootstrap interval (%, ``level`` two-sided) of the pooled critical rate of
     ``records`` (the geometric rule at ``geometric_m`` metres when given, else the index rule,
-    tolerant or strict), resampling whole laps ``resamples`` times from
-    ``seed``, in two levels: the tracks with replacement, then each drawn track's laps (one
-    per false-positive seed) with replacement.
-
-    Whole laps, not poses: a lap's false positives are a few persistent configurations, each
-    seen from many poses in a row (a wrong lane near one false positive is typically 15-25
-    consecutive critical poses), so poses are far from independent and an interval over
-    poses would be several times too narrow. Tracks first: the laps of one track share its
-    geometry (at 0 % false positives every seed gives the same lap), so the interval is as
-    wide as the number of tracks allows. (lo, hi) equal the pooled rate when every lap has
-    the same rate."""
+    tolerant or strict), resampling ``resamples`` times from ``seed``: the tracks with
+    replacement, then each drawn track's laps (one per false-positive seed). Whole laps, not
+    poses: a lap's poses are far from independent (docs/protocol.md, step 4)."""
     if not 0.0 < level < 1.0:
         raise ValueError(f"level must be in (0, 1), got {level!r}")
     if resamples < 1:
