@@ -1,6 +1,7 @@
 """Start-up cost per method (issue 42, item 3): a fresh process that imports ``rld`` and solves
-one lane, once with numba's kernel cache empty (cold) and once more with the cache the cold run
-left (warm). Each run is its own ``python -c`` process with ``RLD_CACHE_DIR`` set to a new
+one lane, once with the user's kernel cache empty (cold: a fresh install, which loads the kernels
+its wheel ships, or compiles them without: ``--no-shipped``) and once more with the cache the
+cold run left (warm). Each run is its own ``python -c`` process with ``RLD_CACHE_DIR`` set to a new
 temporary folder (``NUMBA_CACHE_DIR`` removed, since it would win over ``RLD_CACHE_DIR``).
 
 The frame (track 7, 30 m range, 20 % false positives, a third of the lap) is built once, in a
@@ -57,11 +58,28 @@ print(json.dumps({{"import": t1 - t0, "solve": t2 - t1, "ok": bool(lane.ok)}}))
 """
 
 
+#: Set by ``--no-shipped``: the children see no shipped kernels (an editable install's case).
+NO_SHIPPED: list[bool] = [False]
+
+
 def _child_env(cache: str) -> dict[str, str]:
     env = dict(os.environ)
     env.pop("NUMBA_CACHE_DIR", None)
     env["RLD_CACHE_DIR"] = cache
+    if NO_SHIPPED[0]:
+        env["RLD_KERNELS_DIR"] = os.path.join(cache, "no-shipped-kernels")
     return env
+
+
+def shipped() -> str:
+    """Whether the children load shipped kernels (README "Kernels and start-up"), in words."""
+    code = "from rld._jit import shipped_dir, shipped_manifest; print(shipped_manifest(), " \
+           "shipped_dir())"
+    with tempfile.TemporaryDirectory(prefix="rld-startup-") as cache:
+        out = subprocess.run([sys.executable, "-c", code], env=_child_env(cache),
+                             capture_output=True, text=True, check=True).stdout.strip()
+    manifest, _, where = out.partition(" ")
+    return f"none usable at {where}" if manifest == "None" else f"shipped kernels in {where}"
 
 
 def frame() -> dict:
@@ -93,6 +111,7 @@ def run(methods=METHODS, repeats: int = 3) -> dict[str, dict[str, dict[str, floa
     """``{method: {"cold": {...}, "warm": {...}}}``, each the median over ``repeats`` of
     ``wall``, ``cpu``, ``import`` and ``solve`` seconds; prints a Markdown table."""
     data = frame()
+    print(f"kernels: {shipped()}")
     result: dict[str, dict[str, dict[str, float]]] = {}
     for m in methods:
         runs: dict[str, list[dict[str, float]]] = {"cold": [], "warm": []}
@@ -154,7 +173,10 @@ def main(argv=None) -> None:
     ap.add_argument("--latency", type=int, default=0, metavar="N",
                     help="report the median of N warm solves per method instead")
     ap.add_argument("--json", help="also write the result to this file")
+    ap.add_argument("--no-shipped", action="store_true",
+                    help="hide the shipped kernels: cold = compile everything (editable install)")
     a = ap.parse_args(argv)
+    NO_SHIPPED[0] = a.no_shipped
     if a.latency:
         res = latency(a.methods.split(","), a.latency)
     else:

@@ -1113,9 +1113,11 @@ def bench_generator(sets: str, with_clc: bool, spread_blocks: int, range_m: floa
 @click.option("--latency", "n_latency", default=0, show_default=True,
               type=click.IntRange(min=0),
               help="Instead: the median of this many warm solves per method, a count.")
-def bench_startup(methods: str, repeats: int, n_latency: int) -> None:
+@click.option("--no-shipped", is_flag=True,
+              help="Hide the wheel's shipped kernels: cold then compiles every kernel.")
+def bench_startup(methods: str, repeats: int, n_latency: int, no_shipped: bool) -> None:
     """Start-up per method (issue 42): a fresh process's import and first solve with an empty
-    kernel cache (cold) and with the cache it left (warm), seconds
+    user kernel cache (cold) and with the cache it left (warm), seconds
     (benchmarks/bench_startup.py)."""
     names = [m.strip() for m in methods.split(",") if m.strip()]
     bad = [m for m in names if m not in METHODS]
@@ -1123,6 +1125,7 @@ def bench_startup(methods: str, repeats: int, n_latency: int) -> None:
         raise click.BadParameter(f"unknown methods {bad}; available: {', '.join(sorted(METHODS))}",
                                  param_hint="'--methods'")
     mod = _benchmark_module("bench_startup")
+    mod.NO_SHIPPED[0] = no_shipped
     if n_latency:
         mod.latency(names, n_latency)
     else:
