@@ -107,6 +107,53 @@ def run_once(method: str, cache: str, data: dict) -> dict[str, float]:
     return row
 
 
+#: The floor of any later process: import numba and call one cached one-line kernel.
+FLOOR_KERNEL = """
+import numba
+
+
+@numba.njit(cache=True)
+def bump(x):
+    return x + 1
+"""
+
+FLOOR = """
+import json, sys, time
+t0 = time.perf_counter()
+sys.path.insert(0, {folder!r})
+import numpy, numba
+import floor_kernel
+t1 = time.perf_counter()
+floor_kernel.bump(1)
+t2 = time.perf_counter()
+print(json.dumps({{"import": t1 - t0, "solve": t2 - t1, "ok": True}}))
+"""
+
+
+def floor(repeats: int = 3) -> dict[str, float]:
+    """The medians (wall, cpu, import, solve seconds) of a later process that only imports numba
+    and calls one cached kernel: what no kernel-based method's later process can go below."""
+    rows = []
+    for _ in range(repeats):
+        with tempfile.TemporaryDirectory(prefix="rld-startup-") as folder:
+            with open(os.path.join(folder, "floor_kernel.py"), "w") as fh:
+                fh.write(FLOOR_KERNEL)
+            env = dict(os.environ, NUMBA_CACHE_DIR=os.path.join(folder, "cache"))
+            code = FLOOR.format(folder=folder)
+            for k in range(2):  # the first compiles, the second is measured
+                before = resource.getrusage(resource.RUSAGE_CHILDREN)
+                t0 = time.perf_counter()
+                out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                                     text=True, check=True)
+                wall = time.perf_counter() - t0
+                after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            row = json.loads(out.stdout.strip().splitlines()[-1])
+            row["wall"] = wall
+            row["cpu"] = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+            rows.append(row)
+    return {k: statistics.median(r[k] for r in rows) for k in ("wall", "cpu", "import", "solve")}
+
+
 def run(methods=METHODS, repeats: int = 3) -> dict[str, dict[str, dict[str, float]]]:
     """``{method: {"cold": {...}, "warm": {...}}}``, each the median over ``repeats`` of
     ``wall``, ``cpu``, ``import`` and ``solve`` seconds; prints a Markdown table."""
@@ -131,6 +178,10 @@ def run(methods=METHODS, repeats: int = 3) -> dict[str, dict[str, dict[str, floa
         c, w = r["cold"], r["warm"]
         print(f"| {m} | {c['wall']:.2f} | {c['cpu']:.2f} | {c['import']:.2f} | {c['solve']:.2f} "
               f"| {w['wall']:.2f} | {w['cpu']:.2f} | {w['import']:.2f} | {w['solve']:.2f} |")
+    f = floor(repeats)
+    print(f"| numba floor (one cached one-line kernel) | | | | | {f['wall']:.2f} | {f['cpu']:.2f} "
+          f"| {f['import']:.2f} | {f['solve']:.2f} |")
+    result["numba-floor"] = {"warm": f}
     return result
 
 
