@@ -73,13 +73,13 @@ def _child_env(cache: str) -> dict[str, str]:
 
 def shipped() -> str:
     """Whether the children load shipped kernels (README "Kernels and start-up"), in words."""
-    code = "from rld._jit import shipped_dir, shipped_manifest; print(shipped_manifest(), " \
-           "shipped_dir())"
+    code = "from rld._jit import shipped_dir, shipped_manifest; " \
+           "print(shipped_manifest() is not None, shipped_dir())"
     with tempfile.TemporaryDirectory(prefix="rld-startup-") as cache:
         out = subprocess.run([sys.executable, "-c", code], env=_child_env(cache),
                              capture_output=True, text=True, check=True).stdout.strip()
-    manifest, _, where = out.partition(" ")
-    return f"none usable at {where}" if manifest == "None" else f"shipped kernels in {where}"
+    usable, _, where = out.partition(" ")
+    return f"shipped kernels in {where}" if usable == "True" else f"none usable at {where}"
 
 
 def frame() -> dict:
@@ -140,7 +140,7 @@ def floor(repeats: int = 3) -> dict[str, float]:
                 fh.write(FLOOR_KERNEL)
             env = dict(os.environ, NUMBA_CACHE_DIR=os.path.join(folder, "cache"))
             code = FLOOR.format(folder=folder)
-            for k in range(2):  # the first compiles, the second is measured
+            for _ in range(2):  # the first compiles, the second is measured
                 before = resource.getrusage(resource.RUSAGE_CHILDREN)
                 t0 = time.perf_counter()
                 out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
