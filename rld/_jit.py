@@ -4,6 +4,7 @@ CPU of its architecture. Lookup order and checks: README "Kernels and start-up".
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import os
@@ -26,7 +27,7 @@ try:  # numba's caching internals (stable since numba 0.49; checked by tests/tes
 except ImportError:  # pragma: no cover - a numba without them: plain user-folder cache
     Cache = None
 
-__all__ = ["BUILD_ENV", "cache_dir", "njit", "shipped_dir", "shipped_manifest"]
+__all__ = ["BUILD_ENV", "cache_dir", "host_kernels", "njit", "shipped_dir", "shipped_manifest"]
 
 #: Environment variable naming the folder a wheel build compiles the shipped kernels into.
 BUILD_ENV = "RLD_BUILD_KERNELS"
@@ -69,6 +70,21 @@ def build_manifest() -> dict[str, str]:
     return {"numba": numba.__version__, "numpy": ".".join(np.__version__.split(".")[:2]),
             "python": f"{sys.version_info[0]}.{sys.version_info[1]}",
             "machine": platform.machine(), "cpu": "generic"}
+
+
+#: While True (``host_kernels``), kernels missing from the user cache compile for this CPU.
+_HOST_ONLY = [False]
+
+
+@contextlib.contextmanager
+def host_kernels():
+    """Within: compile what the user cache lacks for this CPU instead of loading the shipped
+    generic kernels (``rld warmup``: a car's kernels tuned to its CPU, found first later)."""
+    previous, _HOST_ONLY[0] = _HOST_ONLY[0], True
+    try:
+        yield
+    finally:
+        _HOST_ONLY[0] = previous
 
 
 @functools.cache
@@ -143,7 +159,7 @@ if Cache is not None:
 
         def load_overload(self, sig, target_context):
             data = super().load_overload(sig, target_context)
-            if data is None and self._shipped is not None:
+            if data is None and self._shipped is not None and not _HOST_ONLY[0]:
                 data = self._shipped.load_overload(sig, target_context)
             return data
 

@@ -1114,7 +1114,8 @@ def bench_generator(sets: str, with_clc: bool, spread_blocks: int, range_m: floa
               type=click.IntRange(min=0),
               help="Instead: the median of this many warm solves per method, a count.")
 @click.option("--no-shipped", is_flag=True,
-              help="Hide the wheel's shipped kernels: cold then compiles every kernel.")
+              help="Hide the wheel's shipped kernels: cold then compiles every kernel "
+                   "(default: off).")
 def bench_startup(methods: str, repeats: int, n_latency: int, no_shipped: bool) -> None:
     """Start-up per method (issue 42): a fresh process's import and first solve with an empty
     user kernel cache (cold) and with the cache it left (warm), seconds

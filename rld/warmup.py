@@ -1,5 +1,5 @@
-"""``rld warmup``: compile every numba kernel a method uses into the kernel cache, ahead of the
-first real call (a car's start-up or install script).
+"""``rld warmup``: compile every numba kernel a method uses into the user kernel cache, for this
+machine's CPU, ahead of the first real call (a car's start-up or install script).
 
 The kernels are compiled on first use and cached on disk (``rld._jit.cache_dir()``); a fresh
 install therefore pays the compilation on its first ``solve_lane`` (seconds to tens of seconds
@@ -41,7 +41,8 @@ def warmup(methods: Iterable[str] | None = None,
     """Compile (or load) every kernel of ``methods`` (default: all of ``rld.api.METHODS``) by
     solving ``warmup_frames()`` with each; returns the seconds each method took. ``progress``
     is called with the method's name after each frame (a progress bar's update)."""
-    from rld.api import METHODS, LaneSolver
+    from rld._jit import host_kernels
+    from rld.api import METHODS
 
     names = list(METHODS) if methods is None else list(methods)
     unknown = [m for m in names if m not in METHODS]
@@ -49,13 +50,22 @@ def warmup(methods: Iterable[str] | None = None,
         raise ValueError(f"unknown methods {unknown}; available: {', '.join(sorted(METHODS))}")
     runs = warmup_frames()
     seconds = {}
-    for m in names:
-        t0 = time.perf_counter()
-        for frames in runs:
-            solver = LaneSolver(method=m)
-            for f in frames:
-                solver.solve(f.cones, f.pose, colors=f.colors)
-                if progress is not None:
-                    progress(m)
-        seconds[m] = time.perf_counter() - t0
+    with host_kernels():
+        for m in names:
+            seconds[m] = _solve_all(m, runs, progress)
     return seconds
+
+
+def _solve_all(method: str, runs, progress) -> float:
+    """Seconds to solve every frame of ``runs`` with ``method``, a new solver per run."""
+    from rld.api import LaneSolver
+
+    t0 = time.perf_counter()
+    for frames in runs:
+        solver = LaneSolver(method=method)
+        for f in frames:
+            solver.solve(f.cones, f.pose, colors=f.colors)
+            if progress is not None:
+                progress(method)
+    return time.perf_counter() - t0
+
