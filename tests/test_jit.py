@@ -101,13 +101,14 @@ if {build}:
 asked = []
 load = _jit._ShippedCache.load_overload
 _jit._ShippedCache.load_overload = lambda self, *a: asked.append(1) or load(self, *a)
-value = kern.bump(1)
+with _jit.host_kernels() if {host} else __import__("contextlib").nullcontext():
+    value = kern.bump(1)
 print(json.dumps({{"value": value, "hits": sum(kern.bump.stats.cache_hits.values()),
                   "shipped": len(asked)}}))
 """
 
 
-def _run(tmp_path, *, step=1, build=False):
+def _run(tmp_path, *, step=1, build=False, host=False):
     """Run ``kern.bump(1)`` in a fresh process: as the wheel build (generic CPU, into ship/)
     or as a user (user cache in user/, shipped kernels in ship/); returns its value, its cache
     hits and how often the shipped kernels were asked."""
@@ -119,7 +120,7 @@ def _run(tmp_path, *, step=1, build=False):
     env.update(RLD_CACHE_DIR=str(user), RLD_KERNELS_DIR=str(ship))
     if build:
         env.update(NUMBA_CPU_NAME="generic", RLD_BUILD_KERNELS=str(ship))
-    code = _RUN.format(folder=str(folder), build=build, ship=str(ship))
+    code = _RUN.format(folder=str(folder), build=build, ship=str(ship), host=host)
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                          check=True).stdout
     return json.loads(out.strip().splitlines()[-1])
@@ -147,6 +148,13 @@ def test_shipped_kernels_of_another_build_or_source_are_not_used(tmp_path):
     # An edited source: its new code runs (numba's source hash), compiled into the user cache.
     _run(tmp_path, build=True)
     assert _run(tmp_path, step=5) == {"value": 6, "hits": 0, "shipped": 1}
+
+
+def test_warmup_compiles_for_this_cpu_what_the_user_cache_lacks(tmp_path):
+    _run(tmp_path, build=True)
+    assert _run(tmp_path, host=True) == {"value": 2, "hits": 0, "shipped": 0}
+    assert _compiled(tmp_path / "user") == 1
+    assert _run(tmp_path) == {"value": 2, "hits": 1, "shipped": 0}
 
 
 def test_the_user_cache_comes_first(tmp_path):
