@@ -99,7 +99,7 @@ def as_set(result) -> set:
 @given(seed=st.integers(0, 2**31 - 1), n=st.integers(5, 9))
 def test_enumeration_is_complete_and_sound(seed, n):
     pts = lane_instance(seed, n)
-    start = find_starting_vertices(pts, POSE, PARAMS.near_radius_m)
+    start = find_starting_vertices(pts, POSE, PARAMS.near_radius_m, PARAMS.start_reach_m)
     res = enumerate_candidates(pts, POSE, PARAMS, max_iterations=0)
     if start is None:
         assert res.start is None and len(res.candidates) == 0
