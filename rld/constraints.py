@@ -40,6 +40,7 @@ __all__ = [
     "angle_triples",
     "turn_within_limit",
     "c_seg",
+    "first_edges_ahead",
     "c_poly",
     "lane_widths",
     "overlap_widths",
@@ -243,6 +244,22 @@ def c_seg(left: np.ndarray, right: np.ndarray, max_turn_rad: float, closed: bool
         turns = geo.polyline_turn_angles(xy, closed=closed and len(xy) >= 3)
         if not np.all(turn_within_limit(turns, max_turn_rad)):
             return False
+    return True
+
+
+def first_edges_ahead(left: np.ndarray, right: np.ndarray, pose: Pose,
+                      max_turn_rad: float) -> bool:
+    """Each boundary's first edge ((k, 2) metres, from the car) turns at most ``max_turn_rad``
+    from the car's heading: C_seg with the heading for the missing segment (ours; CLC's
+    candidates, ``clc.search_kernels.enumerate_pairs``). A boundary of one cone passes."""
+    h = pose.heading
+    for xy in (left, right):
+        if len(xy) >= 2:
+            dx, dy = float(xy[1][0] - xy[0][0]), float(xy[1][1] - xy[0][1])
+            turn = abs(math.atan2(h[0] * dy - h[1] * dx, h[0] * dx + h[1] * dy)) \
+                if (dx or dy) else math.pi
+            if turn > max_turn_rad:
+                return False
     return True
 
 

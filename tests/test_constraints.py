@@ -331,6 +331,21 @@ def test_start_pairs_reach_an_empty_side():
     assert C.find_starting_vertices(START_LINE, CAR, 4.5) is None
 
 
+def test_first_edges_ahead_hand_worked():
+    ahead, back = np.array([[0.0, 1.0], [3.0, 1.0]]), np.array([[0.0, -1.0], [-3.0, -1.0]])
+    across = np.array([[0.0, -1.0], [0.0, -4.0]])  # 90 degrees: the closed limit passes
+    one = np.array([[0.0, -1.0]])
+    half = math.pi / 2
+    assert C.first_edges_ahead(ahead, ahead - [0, 2], CAR, half)
+    assert not C.first_edges_ahead(ahead, back, CAR, half)
+    assert C.first_edges_ahead(ahead, across, CAR, half)
+    assert not C.first_edges_ahead(ahead, across, CAR, 1.5)
+    assert C.first_edges_ahead(one, one, CAR, 0.0)
+    # The heading is the pose's: facing -x, the backward pair is ahead.
+    assert C.first_edges_ahead(back, back, Pose(0.0, 0.0, math.pi), half)
+    assert not C.first_edges_ahead(ahead, ahead, Pose(0.0, 0.0, math.pi), half)
+
+
 def test_heading_mask_counts_the_edges_at_a_far_first_cone():
     # 5.20 m from the car (along it); 1.82 m (along it); across the lane from the far first
     # cone, 82 degrees off the heading.

@@ -1,8 +1,10 @@
-"""Scenes seen on real circuits (issue 39, item 6), built by hand, for every method.
+"""Two scenes seen on real circuits (issue 39, item 6), built by hand, for every method.
 
 The start line: a side's first cone stands 4.9 m ahead of the car and nothing of that side is
 nearer, beyond ``near_radius_m`` (4.5 m); ``LaneParams.start_reach_m`` lets that side start
-there (``rld.constraints.start_mask``).
+there (``rld.constraints.start_mask``). The entry of a sparse hairpin whose legs are 4 m (3 m)
+apart: the inner boundary's two legs are one cone spacing apart, and a lane must not run back
+behind the car (CLC did: its boundaries left their start cones backwards, ``clc.search_kernels``).
 """
 
 from __future__ import annotations
@@ -91,3 +93,37 @@ def test_start_line_needs_the_reach(method):
     cones, _, _ = start_line(4.9, 0.5, 0.0)
     lane = solve_lane(cones, CAR, method=method, params=LaneParams(start_reach_m=0.0))
     assert not lane.ok
+
+
+def hairpin(gap_m: float, car_x: float, spacing_m: float = 5.0):
+    """A left hairpin on a sparse map, the car at (car_x, 0) heading +x on the entry leg.
+
+    Going leg 3.5 m wide about y = 0, cones every 5 m up to x = 10; a half turn about
+    (10, c), c = (gap + 3.5) / 2, with no inner cone between the legs' ends (their inner
+    boundaries are ``gap_m`` apart, one cone spacing) and three outer ones; the return leg
+    along -x. Mapped: the going leg (driven) and the rest where it is not behind the car.
+    Returns ``(cones, pose)``; true left boundary: the inner one, right: the outer one."""
+    c = (gap_m + WIDTH_M) / 2
+    sides = []
+    for r, n_arc in ((gap_m / 2, 0), (gap_m / 2 + WIDTH_M, 3)):
+        xs = np.arange(10.0, -20.0, -spacing_m)[::-1]
+        a = np.linspace(-np.pi / 2, np.pi / 2, n_arc + 2)[1:]
+        back = np.arange(10.0 - spacing_m, -20.0, -spacing_m)
+        side = np.vstack([np.column_stack([xs, np.full(xs.size, c - r)]),
+                          np.column_stack([10.0 + r * np.cos(a), c + r * np.sin(a)]),
+                          np.column_stack([back, np.full(back.size, c + r)])])
+        sides.append(side[(side[:, 1] < c) | (side[:, 0] >= car_x)])
+    return np.vstack(sides), Pose(car_x, 0.0, 0.0)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("gap_m, car_x", [(4.0, 6.5), (4.0, 7.5), (3.0, 7.0)])
+def test_hairpin_entry_lane_does_not_run_back_behind_the_car(method, gap_m, car_x):
+    """No cone after a side's first lies behind the car (car frame x < 0). Before the fix CLC
+    returned the approach reversed here, from the cone ahead back along the legs behind."""
+    cones, pose = hairpin(gap_m, car_x)
+    lane = solve_lane(cones, pose, method=method)
+    assert lane.ok, lane.message
+    for xy in (lane.left_xy, lane.right_xy):
+        x = pose.to_local(xy)[:, 0]
+        assert (x[1:] >= 0).all(), x
