@@ -183,7 +183,7 @@ def enumerate_candidates(
     points = np.ascontiguousarray(points, dtype=np.float64)
     g = graph if isinstance(graph, SearchGraph) else search_graph(points, params, graph)
     if start is None:
-        start = find_starting_vertices(points, pose, params.near_radius_m)
+        start = find_starting_vertices(points, pose, params.near_radius_m, params.start_reach_m)
     if start is None:
         return SearchResult(start=None, graph=g)
     it_max = params.max_iterations if max_iterations is None else int(max_iterations)

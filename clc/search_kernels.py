@@ -765,7 +765,8 @@ def _grow_side(pts, P, nP, v, k, Q, nQ, triedP, triedQ, f, g, in_path, Pbox, Pmi
 def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, wmin, wmax,
                     dist_weight, lookahead, max_iterations, guide_l, guide_r, banned,
                     forbid_l=-1, forbid_r=-1, dead_end=-1.0, stale=0, memo=True):
-    """CLC Alg. 2: enumerate the path pairs from (start_l, start_r) that satisfy CD (eq. 6).
+    """CLC Alg. 2: enumerate the path pairs from (start_l, start_r) that satisfy CD (eq. 6),
+    each boundary's first edge within ``max_turn`` of the heading (ours).
 
     ``pts`` (N, 2) float64 metres; ``adj_ptr`` (N+1,), ``adj_idx`` the search graph in CSR form
     (neighbours sorted by index); ``hx, hy`` the car's unit heading; ``max_turn`` phi_max (rad);
@@ -963,7 +964,16 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
         if feasible:
             feasible = _edge_vs_ring(pts, L, nL, R, nR, nL - 1, True, Lbox, Rbox, LblkBox,
                                      RblkBox)
-        if feasible:
+        # A pair whose boundary leaves its start cone more than phi_max off the car's heading
+        # (C_seg with the heading for the missing segment, as the decider takes it; ours) runs
+        # back behind the car: no candidate. Its subtree is still walked, so the search, its
+        # iterations and completeness stay the same (docs/clc.md, "First edges along the heading").
+        emit = feasible
+        if emit and nL >= 2 and _option_turn(pts, L, 1, L[1], hx, hy) > max_turn:
+            emit = False
+        if emit and nR >= 2 and _option_turn(pts, R, 1, R[1], hx, hy) > max_turn:
+            emit = False
+        if emit:
             need = lp[K] + nL
             if need > lf.shape[0]:
                 lf = grow_int(lf, need)

@@ -269,7 +269,8 @@ def start_pairs(points: np.ndarray, pose: Pose, params: LaneParams) -> list[tupl
     still come after every wider pair, of either kind."""
     k = int(params.start_pairs)
     around = starting_vertex_pairs(points, pose, params.near_radius_m, k,
-                                   params.start_min_width_m, params.start_behind_m)
+                                   params.start_min_width_m, params.start_behind_m,
+                                   params.start_reach_m)
     back = float(params.start_lookback_m)
     if back <= 0:
         return around

@@ -42,7 +42,7 @@ def _chain(points: np.ndarray, start: int, heading: np.ndarray, adj: list[np.nda
 def nearest_chain(points: np.ndarray, pose: Pose, params: LaneParams) -> Lane:
     """The nearest-neighbour chain baseline on validated ``points`` (see the module docstring).
     Its ``cost`` is the number of cones it took (it optimises nothing)."""
-    start = cons.find_starting_vertices(points, pose, params.near_radius_m)
+    start = cons.find_starting_vertices(points, pose, params.near_radius_m, params.start_reach_m)
     if start is None:
         return Lane.not_found(
             points,

@@ -36,9 +36,11 @@ __all__ = [
     "blocked_by_fixed",
     "heading_mask",
     "near_car_mask",
+    "start_mask",
     "angle_triples",
     "turn_within_limit",
     "c_seg",
+    "first_edges_ahead",
     "c_poly",
     "lane_widths",
     "overlap_widths",
@@ -150,13 +152,17 @@ def blocked_by_fixed(points: np.ndarray, edges: np.ndarray, fixed: np.ndarray,
 
 
 def heading_mask(
-    points: np.ndarray, edges: np.ndarray, pose: Pose, radius_m: float, tolerance_rad: float
+    points: np.ndarray, edges: np.ndarray, pose: Pose, radius_m: float, tolerance_rad: float,
+    first: np.ndarray | None = None,
 ) -> np.ndarray:
     """RLD h (eq. 9): edges whose nearest point is within ``radius_m`` of the car and whose line
     is within ``tolerance_rad`` of the car's heading (undirected: an edge and its reverse
-    agree). Boolean (E,)."""
+    agree). Boolean (E,). Edges at a cone of ``first`` (indices: a side's first cone farther
+    than the near radius, ``start_mask``) count as near whatever their distance (ours)."""
     a, b = points[edges[:, 0]], points[edges[:, 1]]
     near = geo.point_segment_distance(pose.xy, a, b) <= radius_m
+    if first is not None and len(first):
+        near |= np.isin(edges[:, 0], first) | np.isin(edges[:, 1], first)
     u = b - a
     length = np.hypot(u[:, 0], u[:, 1])
     cos = np.abs(u @ pose.heading) / np.where(length > 0, length, 1.0)
@@ -169,6 +175,24 @@ def near_car_mask(points: np.ndarray, pose: Pose, radius_m: float) -> np.ndarray
     (also CLC's start-vertex search radius, IV-C). Boolean (N,)."""
     d = points - pose.xy
     return np.hypot(d[:, 0], d[:, 1]) <= radius_m
+
+
+def start_mask(points: np.ndarray, pose: Pose, radius_m: float, reach_m: float) -> np.ndarray:
+    """Cones that may start a boundary, boolean (N,): ``near_car_mask``, and for a side (car frame
+    y > 0 left, y < 0 right) with no cone there, its nearest cone ahead (x > 0) within ``reach_m``
+    metres (ours, a start line: ``LaneParams.start_reach_m``; ``reach_m <= radius_m`` adds none)."""
+    near = near_car_mask(points, pose, radius_m)
+    if reach_m <= radius_m or points.shape[0] == 0:
+        return near
+    local = pose.to_local(points)
+    dist = np.hypot(local[:, 0], local[:, 1])
+    for side in (local[:, 1] > 0, local[:, 1] < 0):
+        if (near & side).any():
+            continue
+        cand = np.flatnonzero(side & (local[:, 0] > 0) & (dist <= reach_m))
+        if cand.size:
+            near[cand[np.argmin(dist[cand])]] = True
+    return near
 
 
 def angle_triples(points: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -220,6 +244,22 @@ def c_seg(left: np.ndarray, right: np.ndarray, max_turn_rad: float, closed: bool
         turns = geo.polyline_turn_angles(xy, closed=closed and len(xy) >= 3)
         if not np.all(turn_within_limit(turns, max_turn_rad)):
             return False
+    return True
+
+
+def first_edges_ahead(left: np.ndarray, right: np.ndarray, pose: Pose,
+                      max_turn_rad: float) -> bool:
+    """Each boundary's first edge ((k, 2) metres, from the car) turns at most ``max_turn_rad``
+    from the car's heading: C_seg with the heading for the missing segment (ours; CLC's
+    candidates, ``clc.search_kernels.enumerate_pairs``). A boundary of one cone passes."""
+    h = pose.heading
+    for xy in (left, right):
+        if len(xy) >= 2:
+            dx, dy = float(xy[1][0] - xy[0][0]), float(xy[1][1] - xy[0][1])
+            turn = abs(math.atan2(h[0] * dy - h[1] * dx, h[0] * dx + h[1] * dy)) \
+                if (dx or dy) else math.pi
+            if turn > max_turn_rad:
+                return False
     return True
 
 
@@ -359,7 +399,7 @@ def hook_position(own: np.ndarray, other: np.ndarray, max_spacing_m: float,
 
 def starting_vertex_pairs(
     points: np.ndarray, pose: Pose, radius_m: float, k: int = 1, min_width_m: float = 0.0,
-    max_behind_m: float = math.inf,
+    max_behind_m: float = math.inf, reach_m: float = 0.0,
 ) -> list[tuple[int, int]]:
     """The ``k`` best (left, right) start pairs of CLC's ``find_starting_vertices`` (IV-C),
     best first (see there); fewer when fewer pairs exist, none when a side has no candidate.
@@ -367,18 +407,27 @@ def starting_vertex_pairs(
     pair, in the same order among themselves (our addition, ``LaneParams.start_min_width_m``;
     0, the default, is the paper's order). Within each of those two groups, pairs with a cone
     more than ``max_behind_m`` metres behind the car (along its heading) come after the others
-    (our addition, ``LaneParams.start_behind_m``; inf, the default, is the paper's order)."""
+    (our addition, ``LaneParams.start_behind_m``; inf, the default, is the paper's order).
+    A side with no cone within ``radius_m`` takes its candidate from ``start_mask`` with
+    ``reach_m`` (our addition, ``LaneParams.start_reach_m``; 0, the default, is the paper's)."""
     # One compiled loop (geometry_kernels.start_pairs_ranked; 0.1 ms of numpy calls before,
     # twice per CLC call): the order of the numpy form, which tests/test_constraints.py keeps.
     pts = np.ascontiguousarray(points, dtype=np.float64)
     out = gk.start_pairs_ranked(pts, float(pose.x), float(pose.y), math.cos(pose.yaw),
                                 math.sin(pose.yaw), float(radius_m), max(int(k), 1),
                                 float(min_width_m), float(max_behind_m))
+    if out.shape[0] == 0 and reach_m > radius_m:
+        # A side without a cone within the radius: the same order over start_mask's cones.
+        sel = np.flatnonzero(start_mask(pts, pose, radius_m, reach_m))
+        out = sel[gk.start_pairs_ranked(pts[sel], float(pose.x), float(pose.y),
+                                        math.cos(pose.yaw), math.sin(pose.yaw), math.inf,
+                                        max(int(k), 1), float(min_width_m),
+                                        float(max_behind_m))]
     return [(int(a), int(b)) for a, b in out]
 
 
 def find_starting_vertices(
-    points: np.ndarray, pose: Pose, radius_m: float
+    points: np.ndarray, pose: Pose, radius_m: float, reach_m: float = 0.0
 ) -> tuple[int, int] | None:
     """CLC ``find_starting_vertices`` (IV-C): the first left and right cone.
 
@@ -387,7 +436,7 @@ def find_starting_vertices(
     one most symmetric about the car's line wins: the mirror image of the left cone across that
     line is nearest the right cone. Ties go to the pair nearest the car, then to the lower
     indices. ``None`` when a side has no candidate. ``starting_vertex_pairs`` gives the
-    runners-up too.
+    runners-up too, and the meaning of ``reach_m``.
     """
-    pairs = starting_vertex_pairs(points, pose, radius_m, 1)
+    pairs = starting_vertex_pairs(points, pose, radius_m, 1, reach_m=reach_m)
     return pairs[0] if pairs else None

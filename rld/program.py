@@ -277,16 +277,18 @@ def build_program(
         triples, turns, t_cost_kept = all_triples, all_turns, t_cost
         forbidden_pairs = all_triples[:0]
     T = triples.shape[0]
-    near = cons.near_car_mask(points, pose, p.near_radius_m)
+    near = cons.start_mask(points, pose, p.near_radius_m, p.start_reach_m)
     if start is not None:
         near = np.zeros(N, dtype=bool)
         near[list(start)] = True
+    # A side's first cone beyond the near radius (start_mask): its edges count for eq. 9.
+    first = np.flatnonzero(near & ~cons.near_car_mask(points, pose, p.near_radius_m))
     edge_cost = costs.edge_objective(points, edges, pose, p, colors, heading=heading)
     cone_cost = np.zeros(N)
     if confidence is not None:
         cone_cost += p.w_confidence * costs.confidence_cost(confidence)
     h = np.flatnonzero(cons.heading_mask(points, edges, pose, p.heading_radius_m,
-                                         p.heading_tolerance_rad)) if heading else None
+                                         p.heading_tolerance_rad, first)) if heading else None
     wc = cons.width_conflicts(points, edges, p.min_width_m)
     cr = cons.crossing_edge_pairs(points, edges) if no_crossing else np.zeros((0, 2), int)
     # Far cone pairs that may not both be far endpoints (eqs 12-17).

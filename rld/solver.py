@@ -30,7 +30,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from rld.backends import make_backend
-from rld.constraints import blocked_by_fixed, lane_is_feasible, near_car_mask
+from rld.constraints import blocked_by_fixed, lane_is_feasible, start_mask
 from rld.program import build_program, cycle_cut, extract_paths, lane_cut
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
@@ -153,7 +153,8 @@ class RldModel:
         (``rld.constraints.blocked_by_fixed``)."""
         budget = DEFAULT_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
         t0 = time.perf_counter()
-        if start is None and near_car_mask(points, pose, self.params.near_radius_m).sum() < 2:
+        if start is None and start_mask(points, pose, self.params.near_radius_m,
+                                        self.params.start_reach_m).sum() < 2:
             return Lane.not_found(
                 points,
                 f"fewer than two cones within near_radius_m = {self.params.near_radius_m} m of "

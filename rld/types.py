@@ -122,7 +122,7 @@ def as_cones(cones: Any, min_cones: int = MIN_CONES) -> np.ndarray:
 #: LaneParams fields for which 0 is meaningful.
 _MAY_BE_ZERO = ("window_behind_m", "nvd_distance_weight", "nvd_lookahead_weight",
                 "contested_margin", "skipped_cone_m", "start_min_width_m", "start_behind_m",
-                "start_lookback_m", "duplicate_radius_m",
+                "start_lookback_m", "start_reach_m", "duplicate_radius_m",
                 "w_regularity", "w_width_roughness", "w_turn_roughness")
 
 
@@ -209,6 +209,10 @@ class LaneParams:
     """RLD d_near (eqs 11-12) and CLC's start-vertex search radius (IV-C), metres: the first cone
     of each boundary lies within it. Source: the rules (a side's cones up to 5 m apart need more
     than CLC IV-C's "such as 2 m")."""
+    start_reach_m: float = 10.0
+    """A side with no cone within ``near_radius_m`` starts at its nearest cone ahead of the car
+    within this, metres (ours, a start line; ``rld.constraints.start_mask``): ``near_radius_m``
+    plus one ``max_cone_spacing_m``; 0 turns it off. Chosen: docs/tuning.md#start_reach_m."""
     far_endpoint_max_m: float = 6.5
     """RLD d_max (eq. 17), metres: the most the two far endpoints may be apart. The paper prints
     no value but calls it "the maximum reasonable lane width", so ``max_width_m``. Chosen by

@@ -1,11 +1,12 @@
 """The CLC search against brute force (theorem 4, shown empirically) and its public behaviour.
 
-Brute force: every pair of simple paths from the two start vertices in the same search graph,
-filtered by the shared whole-path predicate ``lane_is_feasible``. With no iteration limit the
-search must return exactly that set. Since the search emits a pair exactly when its incremental
-checks pass, set equality also shows that after every extension the incremental C_seg, C_poly
-and C_width agree with the whole-path predicates, and that no backtrack ever cut off a
-feasible pair.
+Brute force: every pair of simple paths from the two start vertices in the same search graph
+whose first edges turn at most phi_max from the car's heading (C_seg with the heading for the
+missing segment), filtered by the shared whole-path predicate ``lane_is_feasible``. With no
+iteration limit the search must return exactly that set. Since the search emits a pair exactly
+when its incremental checks pass, set equality also shows that after every extension the
+incremental C_seg, C_poly and C_width agree with the whole-path predicates, and that no
+backtrack ever cut off a feasible pair.
 """
 
 from __future__ import annotations
@@ -35,7 +36,13 @@ from clc.search import (
     unhook,
 )
 from rld import LaneParams, LaneSolver, LaneStatus, Pose, solve_lane
-from rld.constraints import c_seg, find_starting_vertices, hook_position, lane_is_feasible
+from rld.constraints import (
+    c_seg,
+    find_starting_vertices,
+    first_edges_ahead,
+    hook_position,
+    lane_is_feasible,
+)
 from rld.costs import lane_cost, ranking_features
 
 PARAMS = LaneParams()
@@ -56,10 +63,11 @@ def lane_instance(seed: int, n: int) -> np.ndarray:
     return pts[rng.permutation(n)]
 
 
-def brute_force(points: np.ndarray, params: LaneParams, start: tuple[int, int]) -> set:
+def brute_force(points: np.ndarray, params: LaneParams, start: tuple[int, int],
+                pose: Pose = POSE) -> set:
     """All feasible (left, right) path pairs from ``start``, by enumeration of simple paths.
     Paths are pruned by C_seg on their own (C_seg of a pair is C_seg of each path), which
-    changes no answer."""
+    changes no answer; a first edge turning more than phi_max from ``pose``'s heading is none."""
     g = search_graph(points, params)
 
     def paths(s: int) -> list[tuple[int, ...]]:
@@ -74,6 +82,9 @@ def brute_force(points: np.ndarray, params: LaneParams, start: tuple[int, int]) 
                 nxt = path + [v]
                 one = points[nxt[:1]]
                 if len(nxt) >= 3 and not c_seg(points[nxt], one, params.max_turn_angle_rad):
+                    continue
+                if len(nxt) == 2 and not first_edges_ahead(points[nxt], one, pose,
+                                                           params.max_turn_angle_rad):
                     continue
                 rec(nxt)
 
@@ -99,7 +110,7 @@ def as_set(result) -> set:
 @given(seed=st.integers(0, 2**31 - 1), n=st.integers(5, 9))
 def test_enumeration_is_complete_and_sound(seed, n):
     pts = lane_instance(seed, n)
-    start = find_starting_vertices(pts, POSE, PARAMS.near_radius_m)
+    start = find_starting_vertices(pts, POSE, PARAMS.near_radius_m, PARAMS.start_reach_m)
     res = enumerate_candidates(pts, POSE, PARAMS, max_iterations=0)
     if start is None:
         assert res.start is None and len(res.candidates) == 0

@@ -270,14 +270,15 @@ def test_solve_honours_backend_time_limit_and_param(tmp_path):
         assert f"(backend {backend})" in result.output
         doc = json.loads(out.read_text())
         assert doc["backend"] == backend and doc["time_limit_s"] == 5.0
-    # No cone lies within 0.1 m of the car: the nearest-neighbour chain finds no start.
+    # No cone lies within 0.1 m of the car, and no reach beyond: the nearest-neighbour chain
+    # finds no start.
     out = tmp_path / "none.json"
     result = CliRunner().invoke(main, ["solve", str(path), "--pose", "1,0,0", "--method",
-                                       "nearest", "--param", "near_radius_m=0.1", "--out",
-                                       str(out)])
+                                       "nearest", "--param", "near_radius_m=0.1", "--param",
+                                       "start_reach_m=0", "--out", str(out)])
     assert result.exit_code == 1 and "NOT_FOUND" in result.output, result.output
     doc = json.loads(out.read_text())
-    assert doc["params"] == {"near_radius_m": 0.1} and not doc["ok"]
+    assert doc["params"] == {"near_radius_m": 0.1, "start_reach_m": 0.0} and not doc["ok"]
     assert doc["left"] == {"ids": [], "xy": []} and doc["cost"] is None
 
 
@@ -382,9 +383,11 @@ def test_eval_param_overrides_reach_the_solver(tmp_path):
     args = ["eval", "--generated", "1", "--methods", "nearest", "--ranges", "30",
             "--fp-rates", "0", "--every", "40", "--processes", "1"]
     plain = CliRunner().invoke(main, args + ["--out", str(tmp_path / "a")])
-    # No cone lies within 0.1 m of the car: the baseline finds no start and fails everywhere.
+    # No cone lies within 0.1 m of the car, and no reach beyond: the baseline finds no start
+    # and fails everywhere.
     none = CliRunner().invoke(main, args + ["--out", str(tmp_path / "b"),
-                                            "--param", "near_radius_m=0.1"])
+                                            "--param", "near_radius_m=0.1",
+                                            "--param", "start_reach_m=0"])
     assert plain.exit_code == 0 and none.exit_code == 0, plain.output + none.output
     records = [json.loads(line) for line in (tmp_path / "b" / "poses.jsonl").open()]
     assert records and all(r["category"] == "failed" for r in records)
@@ -394,7 +397,8 @@ def test_eval_param_overrides_reach_the_solver(tmp_path):
 
 def test_bench_rld_paper_param_overrides():
     result = CliRunner().invoke(main, ["bench", "rld-paper", "--poses", "2", "--seeds", "0",
-                                       "--param", "near_radius_m=0.1"])
+                                       "--param", "near_radius_m=0.1",
+                                       "--param", "start_reach_m=0"])
     assert result.exit_code == 0, result.output
     assert "| all | 1:5 | 6 | 100.0 | 100.0 |" in result.output
 

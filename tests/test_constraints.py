@@ -302,6 +302,60 @@ def test_near_car_mask():
     assert C.near_car_mask(pts, CAR, 4.5).tolist() == [True, True, False, True]
 
 
+# A start line (the car at the origin heading +x): the left side's first cone 4.9 m ahead
+# (5.20 m away), the next 9.4 m ahead, one 6.1 m behind; the right side beside the car.
+START_LINE = np.array([[4.9, 1.75], [9.4, 1.75], [-6.0, 1.0], [0.5, -1.75], [4.5, -1.75]])
+
+
+def test_start_mask_adds_the_nearest_cone_ahead_of_an_empty_side():
+    assert C.start_mask(START_LINE, CAR, 4.5, 10.0).tolist() == [True, False, False, True,
+                                                                  False]
+    # 5.20 m is beyond a 5 m reach; no reach (or one within the radius) adds nothing.
+    for reach in (5.0, 4.5, 0.0):
+        assert C.start_mask(START_LINE, CAR, 4.5, reach).tolist() == \
+            C.near_car_mask(START_LINE, CAR, 4.5).tolist() == [False, False, False, True, False]
+    # Both sides empty: each gets its own nearest cone ahead (the right one at 4.5 m ahead).
+    both = START_LINE[[0, 1, 2, 4]] + [0.0, 0.0]
+    both[3] = [5.0, -1.75]
+    assert C.start_mask(both, CAR, 4.5, 10.0).tolist() == [True, False, False, True]
+    # A side with a cone within the radius gets nothing more, even one behind the car.
+    behind = np.vstack([START_LINE, [[-4.0, 1.75]]])
+    assert C.start_mask(behind, CAR, 4.5, 10.0).tolist() == [False, False, False, True, False,
+                                                             True]
+
+
+def test_start_pairs_reach_an_empty_side():
+    assert C.starting_vertex_pairs(START_LINE, CAR, 4.5, 3) == []
+    assert C.starting_vertex_pairs(START_LINE, CAR, 4.5, 3, reach_m=10.0) == [(0, 3)]
+    assert C.find_starting_vertices(START_LINE, CAR, 4.5, 10.0) == (0, 3)
+    assert C.find_starting_vertices(START_LINE, CAR, 4.5) is None
+
+
+def test_first_edges_ahead_hand_worked():
+    ahead, back = np.array([[0.0, 1.0], [3.0, 1.0]]), np.array([[0.0, -1.0], [-3.0, -1.0]])
+    across = np.array([[0.0, -1.0], [0.0, -4.0]])  # 90 degrees: the closed limit passes
+    one = np.array([[0.0, -1.0]])
+    half = math.pi / 2
+    assert C.first_edges_ahead(ahead, ahead - [0, 2], CAR, half)
+    assert not C.first_edges_ahead(ahead, back, CAR, half)
+    assert C.first_edges_ahead(ahead, across, CAR, half)
+    assert not C.first_edges_ahead(ahead, across, CAR, 1.5)
+    assert C.first_edges_ahead(one, one, CAR, 0.0)
+    # The heading is the pose's: facing -x, the backward pair is ahead.
+    assert C.first_edges_ahead(back, back, Pose(0.0, 0.0, math.pi), half)
+    assert not C.first_edges_ahead(ahead, ahead, Pose(0.0, 0.0, math.pi), half)
+
+
+def test_heading_mask_counts_the_edges_at_a_far_first_cone():
+    # 5.20 m from the car (along it); 1.82 m (along it); across the lane from the far first
+    # cone, 82 degrees off the heading.
+    edges = np.array([[0, 1], [3, 4], [0, 4]])
+    assert C.heading_mask(START_LINE, edges, CAR, 4.0, math.pi / 4).tolist() == [False, True,
+                                                                                 False]
+    assert C.heading_mask(START_LINE, edges, CAR, 4.0, math.pi / 4, np.array([0])).tolist() == \
+        [True, True, False]
+
+
 def _start_pairs_numpy(points, pose, radius_m, k=1, min_width_m=0.0, max_behind_m=math.inf):
     """The numpy form that ``starting_vertex_pairs`` compiled (geometry_kernels
     .start_pairs_ranked), kept as the reference: every (left, right) pair of cones within the

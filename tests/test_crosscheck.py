@@ -10,8 +10,9 @@ The two feasible sets do not coincide, by construction of the two papers (docs/f
 "RLD-CLC cross-check"): RLD alone has the heading row (eq. 9), the far-endpoint distance rows
 (eqs 12-17), the spacing-cost cut s_crit (eq. 27), pairwise minimum width only between edges
 that are not end to end (eqs 6-8), and paths of at least one edge; CLC alone has the maximum
-width and the minimum width between whole chains (eq. 13). So the tests assert the strongest
-statements that hold:
+width and the minimum width between whole chains (eq. 13), and first edges within phi_max of
+the heading (ours, ``first_edges_ahead``). So the tests assert the strongest statements that
+hold:
 
 (a) every CLC candidate maps to a column vector of the RLD program with the same objective
     (``lane_cost`` == ``LaneProgram.objective``): one home for the costs;
@@ -35,7 +36,7 @@ from hypothesis import strategies as st
 
 from clc.search import enumerate_candidates
 from rld.backends import make_backend
-from rld.constraints import find_starting_vertices, lane_is_feasible
+from rld.constraints import find_starting_vertices, first_edges_ahead, lane_is_feasible
 from rld.costs import lane_cost
 from rld.program import build_program, cycle_cut, extract_paths
 from rld.types import LaneParams, Pose
@@ -172,7 +173,8 @@ def cross_check(seed: int, n: int, backend: str = "cpsat", curvy: bool = False) 
         assert all(cost > opt - tol for cost, _, _ in rld_feasible_costs)
         return fired
     left, right = lane
-    if not lane_is_feasible(points[left], points[right], P):
+    if not (lane_is_feasible(points[left], points[right], P)
+            and first_edges_ahead(points[left], points[right], pose, P.max_turn_angle_rad)):
         fired["rld_lane_rejected_by_clc"] = True
         return fired
     # (c) RLD's optimal lane is a CLC candidate and the minimum over the feasible ones.
