@@ -555,23 +555,9 @@ def trim_behind(points: np.ndarray, pose: Pose, params: LaneParams, left: np.nda
 
 def unhook(points: np.ndarray, params: LaneParams, left: np.ndarray,
            right: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
-    """An open lane with a boundary's hook undone (``rld.constraints.hook_position``: from
-    some cone on, the boundary has crossed the lane's far end and continues the other
-    boundary). The hooked cones are given to the other boundary, whose end they continue: all
-    of them, else the first alone, else none (the boundary is cut before the hook), whichever
-    lane first passes the shared predicates (``lane_is_feasible``); the left side first, then
-    the right, and at most one of them (the other side is the hooked one's continuation then).
-    Returns (left, right, cones moved or cut), the lane unchanged when it has no hook
-    or no repair is feasible. Our addition, docs/clc.md ("Hooks undone").
-
-    The ranker scores a lane by its length and its cones' regularity (section VII); a boundary
-    that takes the other side's last cone, one lane width across, is longer and no less regular,
-    and the hooked lane passes every constraint of the search (eq. 6). On the six shared tracks
-    (seed 0, every 4th pose) 10-13 % of CLC's lanes ended in such a hook at 0 and 30 % false
-    positives, RLD's in 0-1.5 % (its angle and heading costs, eqs 20 and 25, charge the edge
-    across). The edge from the other boundary's end to the hooked cone is within
-    ``max_cone_spacing_m``, an edge of the radius graph (IV-A); with the Delaunay graph it may
-    not be one."""
+    """An open lane with a boundary's hook (``rld.constraints.hook_position``) undone: the hooked
+    cones given to the other boundary, as the shared predicates allow; returns (left, right,
+    cones moved or cut). Our addition: docs/clc.md, "Hooks undone (unhook)"."""
     paths = [np.asarray(left, dtype=np.int64), np.asarray(right, dtype=np.int64)]
     for a in (0, 1):
         own, other = paths[a], paths[1 - a]

@@ -1,47 +1,6 @@
-"""numba kernels of the CLC path-pair enumeration (Ivanov & Markgraf 2024, Alg. 2 and 3).
-
-Everything here works on plain arrays and is called only through ``clc.search``; nothing of
-numba leaks out. The search is the depth-first enumeration of Alg. 2 written as an explicit
-stack, with the constraints of section VI checked incrementally after every extension:
-
-- C_seg (eq. 15): an option whose turn exceeds ``phi_max`` is never taken (lemma 1: once
-  violated it stays violated, so the extension is pruned before it is made).
-- C_poly (lemma 2): the lane ring is L followed by reversed R; its edges are the L edges, the R
-  edges and the *back* edge r_0 -> l_0, which never change once made (*permanent*), and the
-  *front* edge l_n -> r_m, which every extension replaces. A permanent pair that touches is
-  final (backtrack); the front edge is re-checked every time.
-- C_width (eqs 8-13, lemma 3): every vertex and every segment of one boundary is a query whose
-  value is its distance to the whole other boundary. We keep those values exactly, per depth:
-  extending L adds L's new queries and can only lower R's values (the target grew), so a value
-  below ``w_min`` is final; a value above ``w_max`` can still fall, but only when the *other*
-  boundary grows, so it is final when that boundary can no longer be extended in this subtree.
-
-Deviation from the paper, on purpose: Alg. 3 splits matching lines into fixed and mutable ones
-and never recomputes the fixed ones, which makes the width depend on the order in which the
-boundaries were extended. We keep the width of eqs 11-13 exactly (the same numbers as
-``rld.constraints.lane_widths``, bit for bit), so every emitted pair satisfies the shared
-whole-path predicate ``lane_is_feasible`` and the pruning is provably sound: with no iteration
-limit the search returns exactly the feasible path pairs (theorem 4; tested against brute
-force). Culling by bounding circles and boxes (with a margin far above rounding) keeps the
-update cheap without changing any value. We also tried the paper's stronger rule as a heuristic
-(backtrack when a too-wide matching line does not end at the other boundary's last cone): on
-the shared tracks (R = 50 m, every 10th pose, longest-lane ranker) it doubled the critical
-failures (7.1 -> 15.7 % at 0 % false positives, 20.7 -> 29.3 % at 30 %) and completed 5 % of
-searches instead of 1 %, so it is not used.
-
-Next-vertex decider, deviation: |turn| + ``dist_weight`` * distance instead of the turn alone
-(eq. 3), plus ``lookahead`` times the best such score of the step after the option; see
-``LaneParams.nvd_distance_weight`` and ``nvd_lookahead_weight``. Memoized per frame of the
-search (section V-A uses memoization too): a frame's option scores are computed once, when
-the frame is made, and reused each time the search comes back to it; its paths and the
-vertices in them are then the same, and its tried options only grow. (Before 2026-12-03 the
-decider scored both ends afresh at every step.)
-
-Speed: the helpers that allocate nothing are compiled without numba's reference counting
-(``LEAF``); with it, a call passing arrays paid atomic count updates on entry and exit, half
-the time of a search. Both changes keep every candidate, its order and the iteration count
-(tested against the unmemoized search, ``memo=False``).
-"""
+"""numba kernels of the CLC path-pair enumeration (Ivanov & Markgraf 2024, Alg. 2 and 3), with
+the constraints of section VI (eqs 6, 8-15) kept exactly after every extension; called only
+through ``clc.search``. How and why: docs/clc.md, "The search kernels"."""
 
 from __future__ import annotations
 

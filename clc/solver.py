@@ -311,15 +311,8 @@ def _guide_from(seq: np.ndarray, start: int) -> np.ndarray:
 
 class ClcModel:
     """CLC with a pluggable ranker (``learned``, ``rld_cost``, ``longest`` or an object with
-    ``score``), the search graph of IV-A (``radius``) or IV-B (``delaunay``), and optional
-    warm starts from the previous lane (``warm_start=True``).
-
-    Warm start is off by default: on the shared tracks (R = 50 m, every 4th pose, learned
-    ranker) following the previous lane with the whole budget raised the critical failures from
-    8.7 to 20.5 % at 0 % false positives (a wrong choice near the car, once made, was never
-    revisited as the car drove on); splitting the budget between the guided and a fresh search
-    (what ``warm_start=True`` does) gave 9.5 % (cold 8.7) and 20.8 % at 30 % (cold 20.5): no
-    gain, since the fresh search already reaches 98 % of the true lane length."""
+    ``score``), the search graph of IV-A (``radius``) or IV-B (``delaunay``), and warm starts
+    from the previous lane (``warm_start=True``; off by default: docs/tuning.md#warm_start)."""
 
     def __init__(self, params: LaneParams, ranker="learned", graph: str = "radius",
                  warm_start: bool = False) -> None:
@@ -370,46 +363,9 @@ class ClcModel:
         return res, False
 
     def _dive_rounds(self, points, pose, res, winner, deadline=math.inf, search=True):
-        """The contested-choice dives (``clc.search.contested_dives``) around ``winner``
-        (left, right, closed, score), in rounds: the ranker's pick of every dive is a finalist
-        beside the winner; they differ from it at a close call and are about as long, so the
-        ranker's features barely tell them apart, and ``dive_cost`` decides: RLD's objective
-        (the shared ``lane_cost``, eq. 29) and, since 2026-12-03, the width roughness, counted
-        within DIVE_REACH_M of the car (``radius_m``):
-        a dive changes the lane only within the reach, and what it builds beyond in its 40
-        iterations is shorter or longer than the winner's tail by chance, which the whole-lane
-        objective (a benefit for every edge) would weigh as much as the close call itself.
-        Measured 2026-12-02 on the six shared tracks, seeds 0-2 pooled, tolerant critical %
-        at 0 / 10 / 30 % false positives: whole lanes R = 30 m 0.58 / 2.40 / 8.39, R = 50 m
-        0.07 / 0.27 / 2.50; within 25 m 0.36 / 2.09 / 7.25 and 0.07 / 0.27 / 2.21 (docs/clc.md
-        at commit 933288e for the radii and cuts tried). When a dive's lane wins, its own close
-        calls are revisited in the next round (up to DIVE_ROUNDS): a lane two close calls away
-        from the winner, where neither change alone is feasible, is reached in two steps. A
-        close call is identified by the path up to and with its cone and the other boundary,
-        and is never revisited twice.
-        A winner that stops short of the map (``_short``, SHORT_LANE_M) also has every choice
-        within the reach revisited in that round, each of these dives rebuilding the other
-        boundary from beside the choice (``contested_dives(..., cut_other=True)``).
-        No dive starts after ``deadline`` (``time.perf_counter()``).
-        Each round also revisits the winner's largest width jogs (``_jog_dives``, at most
-        JOG_DIVES): a false positive beside the line that the search took with a clear decider
-        margin is no close call, but it jogs the width.
-        Each round also judges the winner without one cone of each close pair within the reach
-        (``clc.search.pair_drops``, PAIR_DROPS; open winners only): a false positive beside a
-        true cone makes a short edge that the dives otherwise escape by dropping a true cone
-        elsewhere; the winner with each skipped cone taken in (``clc.search.skip_inserts``,
-        SKIP_INSERTS; open winners only); and the winner with a boundary's first cone replaced
-        by a cone inside the lane beside its first edge (``clc.search.start_replacements``,
-        START_REPLACE_M; open winners only). ``search=False`` (a complete enumeration,
-        JUDGE_COMPLETE) runs no dive: only these local edits are judged.
-        After the rounds, up to OUTWARD_DROP_PASSES passes judge the winner without one cone
-        that bends its boundary away from the lane (``clc.search.outward_drops``; open
-        winners only, none past the deadline).
-        Returns the final (left, right, closed, score), the counts (a dict keyed by
-        ROUND_COUNTS, for ``lane.stats``: the dives run, the rounds run (a round that changes
-        nothing ends them), the rounds whose winner was short, the jog dives among the dives,
-        the pair-drop, skip-insert, start-replacement and outward-drop lanes judged), the
-        dives' iterations, and whether the deadline stopped them."""
+        """Up to DIVE_ROUNDS rounds of dives and local edits around ``winner`` (left, right,
+        closed, score), judged by ``dive_cost`` within DIVE_REACH_M (m) of the car: returns the
+        winner, ROUND_COUNTS, iterations, deadline hit. docs/clc.md, "Dive rounds"."""
         p = self.params
         done: set[tuple] = set()
         counts = dict.fromkeys(ROUND_COUNTS, 0)

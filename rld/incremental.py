@@ -1,56 +1,6 @@
-"""Incremental RLD on a growing map (``method="rld-incremental"``).
-
-On the car the map is a SLAM map: cones keep their positions between updates and new ones
-appear at the frontier. So the lane found so far is kept, as positions, and each call
-re-optimises only its frontier:
-
-1. Match. Every kept lane cone is looked up in the new map (nearest cone within 0.5 m). A pose
-   jump (more than 5 m or 45 degrees since the last call), a map with fewer cones than before,
-   or a kept cone with no map cone within 0.5 m (it moved or vanished) restarts from scratch.
-   Late insertion: a cone new in the map that lies beside a kept edge (a, b), between its
-   ends and under half the minimum width from it, joins the lane as a -> c -> b when that
-   lowers the shared RLD objective and breaks no constraint (counted in ``insertions``).
-2. Frontier. The last ``frontier_cones`` cones of each boundary are released; the cone before
-   them (the anchor) and the one before that (its predecessor) stay. The frontier program is
-   the ordinary RLD program (``rld.program`` through ``rld.solver.RldModel``, the shared
-   constraints and costs) over the map cones not in the kept lane. Its window: the
-   ``frontier_max_cones`` (default ``max_cones``) free cones nearest to the anchors by path
-   length over the candidate edges, none far behind them. Its near endpoints are fixed to the
-   two predecessors and the edges predecessor-anchor to 1, so the turn limit and the angle
-   cost hold at the junction. The heading row and cost (RLD eqs 9, 25) are left out: the
-   junction edges fix the direction they stand in for. The program's pose (it names the
-   sides) lies between the anchors, heading along the lane.
-   Candidate edges that would cross a kept lane edge, or come closer than ``min_width_m`` to
-   one (RLD eqs 6-8 and the no-crossing rows, ``rld.constraints.blocked_by_fixed``), are
-   closed before the solve, so the frontier is optimal among the extensions consistent with
-   the kept lane.
-3. Rollback. When the frontier program has no lane (or one that breaks those families once
-   the loop's closing edges are added), the kept part is cut back two more cones per side and
-   the frontier solved again, up to ``max_rollbacks`` times; then the solver restarts from
-   the car (the windowed RLD). It restarts too when, after the extension, fewer than
-   ``MIN_AHEAD`` (6) cones lie ahead of the car on a side: the frontier has not kept up (a
-   gap in the map, or a wrong turn it cannot leave; measured on the shared tracks, 6 rather
-   than 3 took the critical failures at 0 % false positives from 2.8 to 1.5 %).
-4. Closing (CLC section IV-E). Each boundary's first cone stays available to the frontier;
-   when both frontier paths run into their own first cone in one solve and the closed lane
-   meets the CLC lane predicates (``rld.constraints.lane_is_feasible(closed=True)``), the
-   lane is closed and frozen.
-
-The returned ``Lane`` starts at the boundary cone nearest the car on each side (the next one
-when that one is behind the car, the protocol's convention for the truth) and runs forward to
-the end of the lane (around the loop when closed). ``lane.stats`` counts ``restarts``,
-``rollbacks`` and ``insertions`` (over the solver's life), says ``mode`` (``start``,
-``extend``, ``closed``), ``restart_reason``, ``lane_cones`` and the frontier program's
-``n_cones_used``.
-
-Guarantees: between two calls without a counted rollback, restart or insertion, the kept lane
-(everything but the released frontier) is unchanged, cone for cone; each frontier satisfies
-every RLD constraint among its own cones, at the junction, and the width and crossing families
-against the kept lane's edges near it. The frontier program never holds more than
-``frontier_max_cones`` cones, whatever the lane's length. Not guaranteed: optimality of the
-whole lane (each frontier is optimal given the kept part), and correction of a wrong cone once
-it is kept: it stays until a restart or until the car has passed it.
-"""
+"""Incremental RLD on a growing map (``method="rld-incremental"``): the lane found so far is kept
+by position and each call re-optimises only its frontier with the RLD program (match, frontier,
+rollback, closing); the steps, what is guaranteed and what is not: docs/incremental.md."""
 
 from __future__ import annotations
 
@@ -101,10 +51,10 @@ def _edges(seq: np.ndarray, closed: bool = False) -> np.ndarray:
 
 
 class IncrementalRld:
-    """RLD that keeps its lane between calls and re-optimises only the frontier (module
-    docstring). ``backend``: as ``RldModel``; ``frontier_cones``: cones per side released and
-    re-optimised at each call; ``max_rollbacks``: how often the kept part may be cut back by
-    two more cones before a restart."""
+    """RLD that keeps its lane between calls and re-optimises only the frontier
+    (docs/incremental.md). ``backend``: as ``RldModel``; ``frontier_cones``: cones per side
+    released and re-optimised at each call; ``max_rollbacks``: how often the kept part may be
+    cut back by two more cones before a restart."""
 
     def __init__(self, params: LaneParams, backend: str | None = None, frontier_cones: int = 3,
                  max_rollbacks: int = 3, frontier_max_cones: int | None = None) -> None:
@@ -159,9 +109,9 @@ class IncrementalRld:
         return out[0], out[1]
 
     def _extend(self, points, L, R, time_limit_s):
-        """One frontier solve with ``back`` cones released per side, rolled back as the module
-        docstring says. Returns ((L, R) or None, rollbacks, closes): ``closes`` when both
-        frontier paths ended on their own boundary's first cone (the loop closes there)."""
+        """One frontier solve with ``back`` cones released per side, rolled back as
+        docs/incremental.md (step 3) says. Returns ((L, R) or None, rollbacks, closes):
+        ``closes`` when both frontier paths ended on their own boundary's first cone."""
         for attempt in range(self.max_rollbacks + 1):
             back = self.frontier_cones + 2 * attempt
             kl, kr = L[: max(L.size - back, 0)], R[: max(R.size - back, 0)]
@@ -363,7 +313,7 @@ class IncrementalRld:
         return side.size if self.closed else side.size - self._start_index(points, pose, side)
 
     def _view(self, points, pose, L, R, status, mode, stats) -> Lane:
-        """The lane from the car forward (module docstring)."""
+        """The lane from the car forward (docs/incremental.md, the returned lane)."""
         out = []
         for side in (L, R):
             j = self._start_index(points, pose, side)

@@ -1,19 +1,6 @@
-"""The ``auto`` backend: per program, the backend measured fastest at its size.
-
-``rld bench rld`` (2026-12-01, 48 generated frames with 20 % false positives, 1 s limit, cold,
-median / p95 ms) after HiGHS lost its presolve up to 30 cones (``rld.backends.highs``):
-
-| n | CP-SAT | HiGHS |
-|---|---|---|
-| 12 | 6.0-7.2 / 16.6-20.7 | 13.4 / 21.0 |
-| 16 | 12.1-15.1 / 28.0-31.6 | 13.9 / 26.1 |
-| 20 | 17.3-21.6 / 43.5-56.4 | 15.1 / 29.6 |
-| 30 | 29.8-32.8 / 87.8-113.9 | 22.8 / 52.3 |
-| 40 | 49.4-52.0 / 226.7-285.2 | 102.1 / 382.7 |
-
-(CP-SAT over four runs, HiGHS one.) So CP-SAT up to 16 cones and above 30, HiGHS in between.
-Both return an optimum of the same program; only ties between equal-cost lanes may differ.
-"""
+"""The ``auto`` backend: per program, the backend measured fastest at its size: CP-SAT up to
+``CPSAT_MAX_CONES`` cones and above ``PRESOLVE_OFF_MAX_CONES``, HiGHS in between; both return
+an optimum of the same program (docs/tuning.md#cpsat_max_cones)."""
 
 from __future__ import annotations
 
@@ -25,6 +12,7 @@ from rld.backends.highs import PRESOLVE_OFF_MAX_CONES, HighsBackend
 from rld.program import LaneProgram
 
 #: Programs with more cones than this and at most ``PRESOLVE_OFF_MAX_CONES`` go to HiGHS.
+#: Chosen by measurement: docs/tuning.md#cpsat_max_cones.
 CPSAT_MAX_CONES = 16
 
 
