@@ -25,12 +25,14 @@ from scipy.spatial import Delaunay
 
 from clc import search_kernels as sk
 from rld import geometry as geo
+from rld.colors import SIDE_LEFT, SIDE_RIGHT
 from rld.constraints import candidate_edges, find_starting_vertices, hook_position, lane_is_feasible
-from rld.costs import open_path_costs, ranking_features, within_radius
+from rld.costs import color_cost, open_path_costs, ranking_features, within_radius
 from rld.types import LaneParams, Pose
 
 __all__ = ["SearchGraph", "SearchResult", "CandidateList", "closable", "merge_results",
-           "search_graph", "enumerate_candidates", "contested_dives", "claim_dive", "dive_at",
+           "search_graph", "color_penalties", "enumerate_candidates", "contested_dives",
+           "claim_dive", "dive_at",
            "pair_drops", "outward_drops", "skip_inserts", "start_replacements", "trim_behind",
            "unhook", "GRAPHS"]
 
@@ -46,12 +48,15 @@ DUPLICATE_M = 1.0
 class SearchGraph:
     """The undirected search graph in CSR form: the neighbours of cone v are
     ``indices[indptr[v]:indptr[v + 1]]``, sorted by index. ``longest_m``: its longest edge
-    (metres), which sets the next-vertex decider's dead-end score."""
+    (metres), which sets the next-vertex decider's dead-end score. ``side_penalty``: (2, N)
+    the decider's colour penalty of each cone on the left (row 0) and on the right (row 1),
+    radians (``color_penalties``), or None without colours; every search on the graph uses it."""
 
     edges: np.ndarray
     indptr: np.ndarray
     indices: np.ndarray
     longest_m: float = 0.0
+    side_penalty: np.ndarray | None = None
 
     def dead_end(self, params: LaneParams) -> float:
         """The look-ahead's score of a cone with no step onward (``search_kernels.
@@ -68,9 +73,23 @@ class SearchGraph:
         return bool(k < nb.size and nb[k] == b)
 
 
-def search_graph(points: np.ndarray, params: LaneParams, kind: str = "radius") -> SearchGraph:
+def color_penalties(colors: np.ndarray | None, params: LaneParams) -> np.ndarray | None:
+    """The next-vertex decider's colour penalty (ours), (2, N) radians: row 0 for taking each
+    cone into the left boundary, row 1 into the right, ``params.nvd_color_weight`` times the
+    shared ``rld.costs.color_cost`` (a cone whose label names the other side); None without
+    labels or with the weight 0. It orders the search, it forbids nothing."""
+    if colors is None or params.nvd_color_weight == 0:
+        return None
+    w = float(params.nvd_color_weight)
+    return np.ascontiguousarray(np.vstack([w * color_cost(colors, SIDE_LEFT),
+                                           w * color_cost(colors, SIDE_RIGHT)]))
+
+
+def search_graph(points: np.ndarray, params: LaneParams, kind: str = "radius",
+                 colors: np.ndarray | None = None) -> SearchGraph:
     """CLC IV-A (``radius``: every pair within ``max_cone_spacing_m``) or IV-B (``delaunay``:
-    the Delaunay edges no longer than it)."""
+    the Delaunay edges no longer than it); ``colors`` (side labels) give it the decider's
+    ``color_penalties``."""
     points = np.ascontiguousarray(points, dtype=np.float64)
     n = points.shape[0]
     if kind == "radius":
@@ -81,7 +100,8 @@ def search_graph(points: np.ndarray, params: LaneParams, kind: str = "radius") -
         raise ValueError(f"unknown search graph {kind!r}; use one of {GRAPHS}")
     indptr, indices = sk.csr_from_edges(np.ascontiguousarray(edges, dtype=np.int64), n)
     return SearchGraph(edges=edges, indptr=indptr, indices=indices,
-                       longest_m=float(sk.dead_end_score(points, indptr, indices, 0.0, 1.0)))
+                       longest_m=float(sk.dead_end_score(points, indptr, indices, 0.0, 1.0)),
+                       side_penalty=color_penalties(colors, params))
 
 
 def _delaunay_edges(points: np.ndarray, max_len: float) -> np.ndarray:
@@ -167,6 +187,7 @@ def enumerate_candidates(
     banned: np.ndarray | None = None,
     forbid: tuple[int, int] = (-1, -1),
     stale: int = 0,
+    colors: np.ndarray | None = None,
 ) -> SearchResult:
     """CLC Alg. 1 up to the ranking: graph, start vertices, Alg. 2, closings.
 
@@ -179,9 +200,11 @@ def enumerate_candidates(
     come right after that side's whole guide, only later (``contested_dives``). ``stale``
     (0: off; only under a limit): abandon the subtree of an extension after which this many
     extensions in a row left the pair infeasible (``clc.solver``'s trapped searches).
+    ``colors`` (side labels): the next-vertex decider's colour penalties, for a graph built
+    here (``search_graph``); a ``SearchGraph`` given brings its own.
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
-    g = graph if isinstance(graph, SearchGraph) else search_graph(points, params, graph)
+    g = graph if isinstance(graph, SearchGraph) else search_graph(points, params, graph, colors)
     if start is None:
         start = find_starting_vertices(points, pose, params.near_radius_m, params.start_reach_m)
     if start is None:
@@ -195,7 +218,8 @@ def enumerate_candidates(
         float(params.nvd_lookahead_weight), int(it_max), np.ascontiguousarray(gl, dtype=np.int64),
         np.ascontiguousarray(gr, dtype=np.int64),
         np.zeros(0, np.int64) if banned is None else np.ascontiguousarray(banned, dtype=np.int64),
-        int(forbid[0]), int(forbid[1]), g.dead_end(params), int(stale))
+        int(forbid[0]), int(forbid[1]), g.dead_end(params), int(stale), True,
+        *((None, None) if g.side_penalty is None else g.side_penalty))
     cands = CandidateList(lf, lp, rf, rp)
     features = feats
     if close_loops:
@@ -276,7 +300,9 @@ def contested_dives(points: np.ndarray, pose: Pose, params: LaneParams, graph: S
                                      float(params.max_turn_angle_rad),
                                      float(params.nvd_distance_weight),
                                      float(params.nvd_lookahead_weight), float(margin), reach,
-                                     graph.dead_end(params))
+                                     graph.dead_end(params),
+                                     None if graph.side_penalty is None
+                                     else graph.side_penalty[side])
         if params.skipped_cone_m > 0:
             pos = np.union1d(pos, sk.skipped_positions(points, graph.indptr, graph.indices, path,
                                                        other, float(params.skipped_cone_m),

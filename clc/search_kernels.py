@@ -98,14 +98,15 @@ def _option_score(pts, adj_ptr, adj_idx, path, n, v, in_path, max_turn, hx, hy, 
 
 @njit(**LEAF)
 def _score_options(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx, hy,
-                   dist_weight, lookahead, dead_end, guide, guided, forbid, out):
+                   dist_weight, lookahead, dead_end, guide, guided, forbid, out, pen):
     """The next-vertex decider's scores (``_option_score``) of every neighbour of the path's
     end, into ``out[k]`` for neighbour slot k: ``inf`` for an option that is tried, in a path,
     beyond the turn limit (C_seg) or ``forbid`` (a vertex, or -1; only when the path is the
-    whole guide). A frame's scores hold for as long as the frame lives: its paths and the
-    vertices in them are the same whenever the search is back at it, and its tried options
-    only grow (they are skipped in ``_pick_option``), so ``enumerate_pairs`` scores each frame
-    once (the decider memoized, as the paper's implementation is, section V-A)."""
+    whole guide); plus ``pen[v]``, the colour penalty of vertex v on this side (``pen`` may be
+    empty: none; ``clc.search.SearchGraph.side_penalty``). A frame's scores hold for as long as the
+    frame lives: its paths and the vertices in them are the same whenever the search is back at it,
+    and its tried options only grow (they are skipped in ``_pick_option``), so ``enumerate_pairs``
+    scores each frame once (the decider memoized, as the paper's implementation is, section V-A)."""
     c = path[n - 1]
     s0 = adj_ptr[c]
     skip = forbid if guided and n == guide.shape[0] else -1
@@ -116,6 +117,8 @@ def _score_options(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx,
         else:
             out[k] = _option_score(pts, adj_ptr, adj_idx, path, n, v, in_path, max_turn, hx,
                                    hy, dist_weight, lookahead, dead_end)
+            if pen.shape[0] > 0:
+                out[k] += pen[v]
 
 
 @njit(**LEAF)
@@ -149,17 +152,18 @@ def _pick_option(adj_ptr, adj_idx, c, n, tried, scores, guide, guided):
 
 @njit(cache=True)
 def _choose_option(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx, hy,
-                   dist_weight, lookahead, dead_end, guide, guided, forbid):
+                   dist_weight, lookahead, dead_end, guide, guided, forbid, pen=None):
     """The next-vertex decider without the memo (``_score_options`` then ``_pick_option``):
     among the neighbours of the path's end that are untried at this frame, in no path and
     within the turn limit (C_seg), the one with the lowest ``_option_score``. The warm-start
     guide's next vertex wins when the path is still a prefix of the guide; when the path is
     the whole guide, ``forbid`` (a vertex, or -1) is not an option. Returns (slot, vertex) or
-    (-1, -1)."""
+    (-1, -1). ``pen``: the colour penalties of the path's side (None: none)."""
     c = path[n - 1]
     scores = np.empty(adj_ptr[c + 1] - adj_ptr[c])
+    p = np.zeros(0) if pen is None else pen
     _score_options(pts, adj_ptr, adj_idx, path, n, tried, in_path, max_turn, hx, hy,
-                   dist_weight, lookahead, dead_end, guide, guided, forbid, scores)
+                   dist_weight, lookahead, dead_end, guide, guided, forbid, scores, p)
     return _pick_option(adj_ptr, adj_idx, c, n, tried, scores, guide, guided)
 
 
@@ -204,14 +208,16 @@ def dead_end_score(pts, adj_ptr, adj_idx, max_turn, dist_weight):
 
 @njit(cache=True)
 def contested_positions(pts, adj_ptr, adj_idx, path, other, hx, hy, max_turn, dist_weight,
-                        lookahead, margin, reach, dead_end=-1.0):
+                        lookahead, margin, reach, dead_end=-1.0, pen=None):
     """Positions j >= 1 of ``path`` (one boundary of a lane, ``other`` the other one) within
     ``reach`` metres of path length from its start at which the next-vertex decider had a
     close second: another option of path[:j] (not in either boundary, within the turn limit)
     whose ``_option_score`` is at most ``margin`` above that of path[j]. Returns the
     positions in order. ``dead_end``: ``dead_end_score`` of the graph when known (< 0: computed
-    here)."""
+    here). ``pen``: the colour penalties of the path's side, added to each score as the search
+    adds them (``_score_options``; None: none)."""
     N = pts.shape[0]
+    p = np.zeros(0) if pen is None else pen
     if dead_end < 0.0:
         dead_end = dead_end_score(pts, adj_ptr, adj_idx, max_turn, dist_weight)
     in_path = np.zeros(N, dtype=np.bool_)
@@ -229,6 +235,8 @@ def contested_positions(pts, adj_ptr, adj_idx, path, other, hx, hy, max_turn, di
         c = path[j - 1]
         chosen = _option_score(pts, adj_ptr, adj_idx, path, j, path[j], in_path, max_turn, hx,
                                hy, dist_weight, lookahead, dead_end)
+        if p.shape[0] > 0:
+            chosen += p[path[j]]
         second = np.inf
         for s in range(adj_ptr[c], adj_ptr[c + 1]):
             v = adj_idx[s]
@@ -236,6 +244,8 @@ def contested_positions(pts, adj_ptr, adj_idx, path, other, hx, hy, max_turn, di
                 continue
             sc = _option_score(pts, adj_ptr, adj_idx, path, j, v, in_path, max_turn, hx, hy,
                                dist_weight, lookahead, dead_end)
+            if p.shape[0] > 0:
+                sc += p[v]
             if sc < second:
                 second = sc
         if second < np.inf and second - chosen <= margin:
@@ -723,7 +733,8 @@ def _grow_side(pts, P, nP, v, k, Q, nQ, triedP, triedQ, f, g, in_path, Pbox, Pmi
 @njit(cache=True)
 def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, wmin, wmax,
                     dist_weight, lookahead, max_iterations, guide_l, guide_r, banned,
-                    forbid_l=-1, forbid_r=-1, dead_end=-1.0, stale=0, memo=True):
+                    forbid_l=-1, forbid_r=-1, dead_end=-1.0, stale=0, memo=True, pen_l=None,
+                    pen_r=None):
     """CLC Alg. 2: enumerate the path pairs from (start_l, start_r) that satisfy CD (eq. 6),
     each boundary's first edge within ``max_turn`` of the heading (ours).
 
@@ -738,7 +749,8 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     after the whole left (right) guide, but may come later (the contested-choice dives of
     ``clc.search``); ``dead_end`` the graph's ``dead_end_score`` when known (< 0: computed
     here); ``memo=False`` scores a frame's options again at every visit instead of once (the
-    same search, slower: the tests' reference for the memo).
+    same search, slower: the tests' reference for the memo); ``pen_l``, ``pen_r`` (None: none)
+    the decider's colour penalty of each vertex on the left and on the right (``_score_options``).
 
     Returns ``(left_flat, left_ptr, right_flat, right_ptr, features, iterations, complete)``:
     candidate k's left boundary is ``left_flat[left_ptr[k]:left_ptr[k+1]]`` (likewise right),
@@ -749,6 +761,8 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     N = pts.shape[0]
     if dead_end < 0.0:
         dead_end = dead_end_score(pts, adj_ptr, adj_idx, max_turn, dist_weight)
+    penL = np.zeros(0) if pen_l is None else pen_l
+    penR = np.zeros(0) if pen_r is None else pen_r
     maxdeg = 1
     for v in range(N):
         d = adj_ptr[v + 1] - adj_ptr[v]
@@ -843,10 +857,10 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
             if not scored[f] or not memo:
                 _score_options(pts, adj_ptr, adj_idx, L, nL, triedL[f], in_path, max_turn, hx,
                                hy, dist_weight, lookahead, dead_end, guide_l, on_gl[nL - 1],
-                               forbid_l, scoreL[f])
+                               forbid_l, scoreL[f], penL)
                 _score_options(pts, adj_ptr, adj_idx, R, nR, triedR[f], in_path, max_turn, hx,
                                hy, dist_weight, lookahead, dead_end, guide_r, on_gr[nR - 1],
-                               forbid_r, scoreR[f])
+                               forbid_r, scoreR[f], penR)
                 scored[f] = True
             kl, vl = _pick_option(adj_ptr, adj_idx, L[nL - 1], nL, triedL[f], scoreL[f],
                                   guide_l, on_gl[nL - 1])

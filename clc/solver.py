@@ -54,6 +54,7 @@ from clc.search import (
 )
 from rld.constraints import lane_is_feasible, starting_vertex_pairs
 from rld.costs import (
+    lane_color_costs,
     lane_cost,
     ranking_features,
     reach_costs,
@@ -142,7 +143,7 @@ UNHOOK = True
 
 
 def dive_cost(points: np.ndarray, pose: Pose, params: LaneParams, left: np.ndarray,
-              right: np.ndarray, closed: bool = False) -> float:
+              right: np.ndarray, closed: bool = False, colors: np.ndarray | None = None) -> float:
     """What the dive judge minimises (``ClcModel._dive_rounds``): RLD's objective (the shared
     ``lane_cost``, eq. 29) counted within ``DIVE_REACH_M`` of the car, plus
     ``params.w_width_roughness`` times the width roughness (``rld.costs.width_roughness``, ours)
@@ -151,14 +152,17 @@ def dive_cost(points: np.ndarray, pose: Pose, params: LaneParams, left: np.ndarr
     jogs the width (measured in ``LaneParams.w_width_roughness``). Since 2026-12-03 also
     ``params.w_turn_roughness`` times the turn roughness of both boundaries' same parts
     (``rld.costs.turn_roughness``, ours): a false positive inserted between two true cones
-    zigzags the boundary's turns without jogging the width much. An open lane's is
-    ``rld.costs.reach_costs`` (``dive_costs`` weighs many at once)."""
+    zigzags the boundary's turns without jogging the width much. With ``colors`` (side labels,
+    since 2026-12-06) the objective includes ``params.w_color`` times the colour cost
+    (``rld.costs.color_cost``). An open lane's is ``rld.costs.reach_costs`` (``dive_costs``
+    weighs many at once)."""
     if not closed:
-        return float(reach_costs(points, pose, params, [(left, right)], DIVE_REACH_M)[0])
+        return float(reach_costs(points, pose, params, [(left, right)], DIVE_REACH_M,
+                                 colors)[0])
     # A closed lane's objective counts whole (``lane_cost``); its roughness, the cut sides'.
     a = within_radius(points, left, pose, DIVE_REACH_M)
     b = within_radius(points, right, pose, DIVE_REACH_M)
-    cost = lane_cost(points, left, right, pose, params, closed=True)
+    cost = lane_cost(points, left, right, pose, params, closed=True, colors=colors)
     if params.w_width_roughness:
         cost += params.w_width_roughness * width_roughness(points[a], points[b])
     if params.w_turn_roughness:
@@ -166,19 +170,22 @@ def dive_cost(points: np.ndarray, pose: Pose, params: LaneParams, left: np.ndarr
     return cost
 
 
-def dive_costs(points: np.ndarray, pose: Pose, params: LaneParams, lanes) -> list[float]:
-    """``dive_cost`` of every ``(left, right, closed, ...)`` of ``lanes``: the open ones in one
-    compiled call (``rld.costs.reach_costs``), the closed ones one by one."""
+def dive_costs(points: np.ndarray, pose: Pose, params: LaneParams, lanes,
+               colors: np.ndarray | None = None) -> list[float]:
+    """``dive_cost`` of every ``(left, right, closed, ...)`` of ``lanes`` (with ``colors``):
+    the open ones in one compiled call (``rld.costs.reach_costs``), the closed ones one by
+    one."""
     lanes = list(lanes)
     out = [0.0] * len(lanes)
     open_k = [k for k, lane in enumerate(lanes) if not lane[2]]
     if open_k:
-        vals = reach_costs(points, pose, params, [lanes[k][:2] for k in open_k], DIVE_REACH_M)
+        vals = reach_costs(points, pose, params, [lanes[k][:2] for k in open_k], DIVE_REACH_M,
+                           colors)
         for k, v in zip(open_k, vals.tolist(), strict=True):
             out[k] = v
     for k, lane in enumerate(lanes):
         if lane[2]:
-            out[k] = dive_cost(points, pose, params, lane[0], lane[1], True)
+            out[k] = dive_cost(points, pose, params, lane[0], lane[1], True, colors)
     return out
 
 
@@ -331,6 +338,7 @@ class ClcModel:
             self.ranker = get_ranker("longest")
             self.ranker_name = "longest (no learned model)"
         self._prev: tuple[np.ndarray, np.ndarray] | None = None
+        self._colors: np.ndarray | None = None  # this call's side labels (``solve``)
         #: Called as ``judge_hook(points, pose, winner, contenders)`` before each decision of
         #: the dive judge (``_cheapest``): ``winner`` is (left, right, closed, score), each
         #: contender (left, right, closed, score or None for an unchecked local edit). For
@@ -347,7 +355,7 @@ class ClcModel:
         it = self.params.max_iterations
         half = max(it // 2, 1) if it > 0 else 0
         a = enumerate_candidates(points, pose, self.params, graph=self.graph, start=start,
-                                 guide=guide, max_iterations=half)
+                                 guide=guide, max_iterations=half, colors=self._colors)
         b = enumerate_candidates(points, pose, self.params, graph=a.graph, start=start,
                                  max_iterations=max(it - half, 1) if it > 0 else 0)
         return merge_results(a, b)
@@ -424,14 +432,13 @@ class ClcModel:
                 iterations += dive.iterations
                 if not dive.candidates:
                     continue
-                s = np.asarray(self.ranker.score(points, pose, p, dive.candidates,
-                                                 dive.features), dtype=np.float64)
+                s = self._score(points, pose, dive.candidates, dive.features)
                 k = int(np.argmax(s))
                 contenders.append((*dive.candidates[k], float(s[k])))
             if not contenders:
                 break
             if cost is None:
-                cost = dive_cost(points, pose, p, *winner[:3])
+                cost = dive_cost(points, pose, p, *winner[:3], self._colors)
             if self.judge_hook is not None:
                 self.judge_hook(points, pose, winner, contenders)
             best, best_cost, _ = self._cheapest(points, pose, contenders, cost)
@@ -452,7 +459,7 @@ class ClcModel:
             if not trials:
                 break
             if cost is None:
-                cost = dive_cost(points, pose, p, *winner[:3])
+                cost = dive_cost(points, pose, p, *winner[:3], self._colors)
             trials = [(a, b, False, None) for a, b in trials]
             if self.judge_hook is not None:
                 self.judge_hook(points, pose, winner, trials)
@@ -471,7 +478,7 @@ class ClcModel:
         check costs more than the judge; a dive's lanes are feasible already), and is scored by
         the ranker only if it wins. Returns (the pick or None, its cost, local edits checked)."""
         p = self.params
-        costs = dive_costs(points, pose, p, contenders)
+        costs = dive_costs(points, pose, p, contenders, self._colors)
         checked = 0
         for i in sorted(range(len(contenders)),
                         key=lambda i: costs[i] if math.isfinite(costs[i]) else math.inf):
@@ -483,13 +490,28 @@ class ClcModel:
                 if not lane_is_feasible(points[a], points[b], p):
                     continue
                 f = ranking_features(points[a], points[b])[None, :]
-                sc = float(self.ranker.score(points, pose, p, [(a, b, c)], f)[0])
+                sc = float(self._score(points, pose, [(a, b, c)], f)[0])
             return (a.copy(), b.copy(), c, sc), costs[i], checked
         return None, cost, checked
+
+    def _score(self, points, pose, candidates, features) -> np.ndarray:
+        """The ranker's scores of ``candidates``, less ``params.rank_color_weight`` times each
+        one's colour cost within ``DIVE_REACH_M`` per cone counted there
+        (``rld.costs.lane_color_costs(share=True)``) when this call has colours: the learned
+        ranker's features are fixed by its trained weights, so colour enters after it; per
+        cone, so that it does not trade against the lane's length."""
+        s = np.asarray(self.ranker.score(points, pose, self.params, candidates, features),
+                       dtype=np.float64)
+        w = self.params.rank_color_weight
+        if self._colors is None or w == 0 or s.size == 0:
+            return s
+        return s - w * lane_color_costs(points, self._colors, candidates, pose, DIVE_REACH_M,
+                                        share=True, near_radius_m=self.params.near_radius_m)
 
     def solve(self, points: np.ndarray, pose: Pose, colors=None, time_limit_s=None,
               confidence=None) -> Lane:
         t0 = time.perf_counter()
+        self._colors = colors
         # The compiled searches have no clock (max_iterations bounds each); the budget is
         # checked between them: past it, the searches that refine a lane already found (the
         # runner-up start pairs once a lane exists, the trapped search's rerun, the dives) are
@@ -507,7 +529,8 @@ class ClcModel:
                 guide = (gl, gr)
                 stats["warm_start_cones"] = int(gl.size + gr.size)
         if guide is None:
-            res = enumerate_candidates(points, pose, self.params, graph=self.graph, start=start)
+            res = enumerate_candidates(points, pose, self.params, graph=self.graph, start=start,
+                                       colors=colors)
         else:
             res = self._split_search(points, pose, start, guide)
         # No feasible path pair from the best start pair: the runners-up, one at a time
@@ -536,8 +559,8 @@ class ClcModel:
             iterations += res.iterations - before
         stats.update(iterations=iterations, complete=res.complete,
                      n_candidates=len(res.candidates), n_cones_used=int(points.shape[0]))
-        if colors is not None or confidence is not None:
-            stats["note"] = "CLC does not use colors or confidence (section III-A)"
+        if confidence is not None:
+            stats["note"] = "CLC does not use confidence (section III-A)"
         if res.start is None:
             self._prev = None
             return Lane.not_found(points, f"no cone within {self.params.near_radius_m} m of the "
@@ -547,8 +570,7 @@ class ClcModel:
             self._prev = None
             return Lane.not_found(points, "no path pair from the start cones satisfies the "
                                   "lane constraints", stats=stats)
-        scores = np.asarray(self.ranker.score(points, pose, self.params, res.candidates,
-                                              res.features), dtype=np.float64)
+        scores = self._score(points, pose, res.candidates, res.features)
         best = int(np.argmax(scores))  # ties: the first found
         left, right, closed = res.candidates[best]
         left, right = left.copy(), right.copy()

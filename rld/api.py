@@ -35,9 +35,9 @@ class _NearestMethod:
         self.params = params
 
     def solve(self, points, pose, colors=None, time_limit_s=None, confidence=None) -> Lane:
-        lane = nearest_chain(points, pose, self.params)
-        if colors is not None or confidence is not None:
-            lane.stats["note"] = "the nearest-neighbour chain ignores colors and confidence"
+        lane = nearest_chain(points, pose, self.params, colors=colors)
+        if confidence is not None:
+            lane.stats["note"] = "the nearest-neighbour chain ignores confidence"
         return lane
 
 
@@ -55,6 +55,8 @@ class _HuangMethod:
 
         lane = huang_lane(points, pose, self.params)
         if colors is not None or confidence is not None:
+            # Its evidence grid (eq. 3) is isotropic: no side until the parabola is fitted,
+            # and then colour could only filter cones, a hard rule (docs/huang.md).
             lane.stats["note"] = "the fitted baseline ignores colors and confidence"
         return lane
 
@@ -320,11 +322,14 @@ def solve_lane(
     backend. ``colors``: optional per-cone Formula Student classes (``blue``, ``yellow``,
     ``orange``, ``big_orange``, ``unknown``; ``left``/``right`` for blue/yellow) or their codes
     (0 unknown, 1 yellow, 2 blue, 3 orange, 4 big orange); or ``class_probs``, (N, 5)
-    probabilities in that order (``rld.colors``). Evidence, a cost for RLD
-    (``LaneParams.w_color``), never a hard rule. ``confidence``: optional per-cone detection
-    confidence in [0, 1], a cost for RLD (``LaneParams.w_confidence``). The nearest-neighbour
-    baseline ignores both. ``time_limit_s``: the solve's time budget (RLD default 0.4 s; CLC is
-    bounded by ``params.max_iterations`` instead). ``ranker``: the CLC ranker (default
+    probabilities in that order (``rld.colors``). Evidence, never a hard rule: a cost per cone
+    on the side its class contradicts (``rld.costs.color_cost``; ``LaneParams.w_color`` in RLD,
+    its incremental form and CLC's dive judge, ``nvd_color_weight`` in CLC's search order,
+    ``rank_color_weight`` after its ranker), a preference in the nearest-neighbour chain; the
+    fitted baseline (``huang``) ignores it. ``confidence``: optional per-cone detection
+    confidence in [0, 1], a cost for RLD (``LaneParams.w_confidence``). ``time_limit_s``: the
+    solve's time budget (RLD default 0.4 s; CLC is bounded by ``params.max_iterations``
+    instead). ``ranker``: the CLC ranker (default
     ``learned``). Duplicate cones are merged first and a lane has two cones a side at least,
     whatever the method (``LaneSolver.solve``).
     """

@@ -13,6 +13,7 @@ import numpy as np
 
 from rld import costs_kernels as ck
 from rld import geometry as geo
+from rld.colors import SIDE_LEFT, SIDE_RIGHT
 from rld.constraints import lane_widths
 from rld.types import LaneParams, Pose
 
@@ -31,6 +32,11 @@ __all__ = [
     "reach_costs",
     "open_path_costs",
     "color_cost",
+    "boundary_color_cost",
+    "color_edge_cost",
+    "color_skip_cost",
+    "color_start_cost",
+    "lane_color_costs",
     "confidence_cost",
     "ranking_features",
     "FEATURE_NAMES",
@@ -164,29 +170,116 @@ def edge_objective(
     edges: np.ndarray,
     pose: Pose,
     params: LaneParams,
-    colors: np.ndarray | None = None,
     heading: bool = True,
 ) -> np.ndarray:
     """Coefficient of every edge variable in RLD's objective (eq. 29):
-    ``w_s s_ij + w_p p_ij - w_b``, plus ``w_color`` times the colour cost when ``colors`` are
-    given. ``heading=False`` leaves out the heading cost ``w_p p_ij`` (the incremental
-    solver's frontier, whose direction is fixed by its junction edges instead)."""
+    ``w_s s_ij + w_p p_ij - w_b``. ``heading=False`` leaves out the heading cost ``w_p p_ij``
+    (the incremental solver's frontier, whose direction is fixed by its junction edges
+    instead). The colour cost is per cone, not per edge (``color_cost``)."""
     lengths = np.hypot(*(points[edges[:, 1]] - points[edges[:, 0]]).T)
     s = spacing_cost(lengths, params.expected_spacing_m, params.spacing_tolerance_m)
     out = params.w_spacing * s - params.w_benefit
     if heading:
         out = out + params.w_heading * heading_cost(points, edges, pose,
                                                     params.heading_min_distance_m)
-    if colors is not None:
-        out = out + params.w_color * color_cost(colors, edges)
     return out
 
 
-def color_cost(colors: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """1 for an edge joining a cone labelled left (1) to one labelled right (2), else 0
-    (unknown, 0, never costs). Our extension (RLD section V)."""
-    a, b = colors[edges[:, 0]], colors[edges[:, 1]]
-    return ((a > 0) & (b > 0) & (a != b)).astype(np.float64)
+def color_cost(colors: np.ndarray, side: int) -> np.ndarray:
+    """Whether each cone's side label (``colors``, ``rld.colors``) contradicts ``side``
+    (``SIDE_LEFT`` or ``SIDE_RIGHT``), (N,) floats 1 or 0; unknown, orange and big orange
+    never do. The indicator the colour costs are made of: ``boundary_color_cost`` (RLD's
+    objective, CLC's judge and ranking), CLC's next-vertex decider
+    (``clc.search.color_penalties``), the nearest-neighbour chain."""
+    if side not in (SIDE_LEFT, SIDE_RIGHT):
+        raise ValueError(f"side must be SIDE_LEFT ({SIDE_LEFT}) or SIDE_RIGHT ({SIDE_RIGHT})")
+    other = SIDE_RIGHT if side == SIDE_LEFT else SIDE_LEFT
+    return (np.asarray(colors) == other).astype(np.float64)
+
+
+def boundary_color_cost(points: np.ndarray, colors: np.ndarray, idx: np.ndarray, pose: Pose,
+                        near_radius_m: float, closed: bool = False) -> float:
+    """The colour cost of one boundary (ours; RLD section V names colour as future work),
+    unweighted: for the boundary ``idx`` (indices into ``points`` and ``colors``, side labels),
+    1/2 for every edge whose cones' labels name different sides, 1/2 for every three
+    consecutive cones whose middle one has no side label and whose outer ones name different
+    sides, and 1/2 for every end of an open boundary within ``near_radius_m`` of the car whose
+    label contradicts the side of the car it lies on (``color_cost``); 0 for fewer than two
+    cones. So a cone of the other side's class among its own costs 1 wherever it stands in the
+    boundary (two edges, or its edge and the start), as 1 per contradicting cone would; a run
+    of them costs 1 at each change of class. Why not 1 per cone on its wrong side: the paper's
+    program (eqs 1-29) does not know which path is left, and the side columns that would tell
+    it cost too much time (docs/formulation.md, "Colour"); so every RLD form, CLC's judge and
+    its ranking pay this one, linear in the edge (a), angle (f, eq. 21) and endpoint (m, eq.
+    10) variables. With every label swapped it charges each lane through the true cones alike
+    (1/2 a start). ``costs_kernels.boundary_color``."""
+    h = pose.heading
+    return float(ck.boundary_color(np.ascontiguousarray(points, dtype=np.float64),
+                                   np.ascontiguousarray(colors, dtype=np.int64),
+                                   np.ascontiguousarray(idx, dtype=np.int64), bool(closed),
+                                   float(pose.xy[0]), float(pose.xy[1]), float(h[0]),
+                                   float(h[1]), float(near_radius_m)))
+
+
+def color_edge_cost(colors: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """``boundary_color_cost``'s edge term for each edge (E, 2): 1/2 where its two cones'
+    labels name different sides, else 0 (RLD's program puts it on the edge variables)."""
+    a, b = np.asarray(colors)[edges[:, 0]], np.asarray(colors)[edges[:, 1]]
+    return 0.5 * ((a > 0) & (b > 0) & (a != b))
+
+
+def color_skip_cost(colors: np.ndarray, triples: np.ndarray) -> np.ndarray:
+    """``boundary_color_cost``'s term for each triple (i, j, k, ...) of consecutive cones: 1/2
+    where j has no side label and the labels of i and k name different sides (RLD's program
+    puts it on the angle variables f_ijk)."""
+    c = np.asarray(colors)
+    a, m, b = c[triples[:, 0]], c[triples[:, 1]], c[triples[:, 2]]
+    return 0.5 * ((m == 0) & (a > 0) & (b > 0) & (a != b))
+
+
+def color_start_cost(points: np.ndarray, colors: np.ndarray, pose: Pose) -> np.ndarray:
+    """``boundary_color_cost``'s end term for each cone were it an end near the car: 1/2 where
+    its label contradicts the side of the car it lies on (RLD's program puts it on the
+    endpoint variables m_i of the near cones)."""
+    y = pose.to_local(np.asarray(points, dtype=np.float64))[:, 1]
+    side = np.where(y > 0, SIDE_LEFT, np.where(y < 0, SIDE_RIGHT, 0))
+    c = np.asarray(colors)
+    return 0.5 * ((c > 0) & (side > 0) & (c != side))
+
+
+def lane_color_costs(points: np.ndarray, colors: np.ndarray, lanes, pose: Pose,
+                     radius_m: float | None = None, share: bool = False,
+                     near_radius_m: float | None = None) -> np.ndarray:
+    """``boundary_color_cost`` of each open lane's two boundaries, unweighted, (K,) floats (the
+    start radius ``LaneParams.near_radius_m``'s default unless ``near_radius_m``);
+    ``share=True``: that over the cones counted (those of sides of two cones or more; 0 for
+    none), which does not grow with the lane's length. ``lanes``: a CLC ``CandidateList``
+    (``flat()``) or a sequence of ``(left, right, ...)`` index arrays into ``points``; with
+    ``radius_m``, each boundary cut there first (``within_radius``). One compiled
+    loop (``costs_kernels.lane_color_counts``): CLC ranks hundreds of candidates per call."""
+    if hasattr(lanes, "flat"):
+        lf, lp, rf, rp, _ = lanes.flat()
+    else:
+        lanes = list(lanes)
+        if not lanes:
+            return np.zeros(0)
+        paths = [[np.asarray(lane[s], dtype=np.int64).reshape(-1) for lane in lanes]
+                 for s in (0, 1)]
+        lf, rf = (np.concatenate(q) for q in paths)
+        lp, rp = (np.concatenate([[0], np.cumsum([q.size for q in qs])]) for qs in paths)
+    out = np.zeros(len(lp) - 1)
+    counted = np.zeros(len(lp) - 1)
+    h = pose.heading
+    near = LaneParams().near_radius_m if near_radius_m is None else float(near_radius_m)
+    ck.lane_color_counts(np.ascontiguousarray(points, dtype=np.float64),
+                         np.ascontiguousarray(colors, dtype=np.int64),
+                         np.ascontiguousarray(lf, dtype=np.int64),
+                         np.ascontiguousarray(lp, dtype=np.int64),
+                         np.ascontiguousarray(rf, dtype=np.int64),
+                         np.ascontiguousarray(rp, dtype=np.int64),
+                         float(pose.xy[0]), float(pose.xy[1]), float(h[0]), float(h[1]), near,
+                         0.0 if radius_m is None else float(radius_m), out, counted)
+    return out / np.maximum(counted, 1.0) if share else out
 
 
 def confidence_cost(confidence: np.ndarray) -> np.ndarray:
@@ -209,9 +302,11 @@ def lane_cost(
 ) -> float:
     """RLD's objective (eq. 29) of the lane graph made by two index sequences: the sum of the
     edge coefficients of its edges plus ``w_t`` times the angle cost at every interior cone,
-    plus the colour and confidence costs when given (``sided`` adds the per-cone colour cost
-    of the side-aware formulation). ``heading=False`` leaves out the heading cost, as the
-    incremental solver's frontier program does (``edge_objective``).
+    plus the confidence cost and ``w_color`` times the colour cost of each boundary
+    (``boundary_color_cost``, start radius ``near_radius_m``) when given; every RLD form pays
+    the same (``sided`` is kept for callers and changes nothing since 2026-12-06).
+    ``heading=False`` leaves out the heading cost, as the incremental solver's frontier
+    program does (``edge_objective``).
 
     ``radius_m`` (open lanes only; None: the whole lane): each boundary counts only up to and
     with its first cone farther than this from the car (``within_radius``), so two lanes that
@@ -219,15 +314,15 @@ def lane_cost(
     judge, ``clc.solver``). Closed lanes always count whole."""
     total = 0.0
     open_paths = []  # the open boundaries, costed in one batch (half the numpy overhead)
-    for side, idx in enumerate((left, right)):
+    wrong = 0.0  # the colour cost, added once (the same float as ``reach_costs``)
+    for idx in (left, right):
         idx = np.asarray(idx, dtype=np.int64)
         if radius_m is not None and not closed:
             idx = within_radius(points, idx, pose, radius_m)
         if confidence is not None and idx.size >= 2:
             total += params.w_confidence * float(confidence_cost(confidence[idx]).sum())
-        if sided and colors is not None and idx.size >= 2:
-            wrong = 2 if side == 0 else 1
-            total += params.w_color * float((colors[idx] == wrong).sum())
+        if colors is not None and idx.size >= 2:
+            wrong += boundary_color_cost(points, colors, idx, pose, params.near_radius_m, closed)
         if idx.size < 2:
             continue
         if not closed:
@@ -235,17 +330,19 @@ def lane_cost(
             continue
         seq = np.concatenate([idx, idx[:1]])
         edges = np.column_stack([seq[:-1], seq[1:]])
-        total += float(edge_objective(points, edges, pose, params, colors, heading).sum())
+        total += float(edge_objective(points, edges, pose, params, heading).sum())
         turns = geo.polyline_turn_angles(points[idx], closed=True)
         total += params.w_angle * float(angle_cost(turns, params.angle_tolerance_rad).sum())
         if params.w_regularity:
             lens = np.hypot(*np.diff(points[seq], axis=0).T)
             total += params.w_regularity * float(regularity_cost(
                 lens, np.roll(lens, 1), params.regularity_tolerance).sum())
+    if wrong:
+        total += params.w_color * wrong
     if open_paths:
         ptr = np.concatenate([[0], np.cumsum([q.size for q in open_paths])])
         total += float(open_path_costs(points, np.concatenate(open_paths), ptr, pose, params,
-                                       colors, heading).sum())
+                                       heading=heading).sum())
     return total
 
 
@@ -265,16 +362,16 @@ def within_radius(points: np.ndarray, idx: np.ndarray, pose: Pose,
                               float(pose.xy[0]), float(pose.xy[1]), float(radius_m))]
 
 
-def reach_costs(points: np.ndarray, pose: Pose, params: LaneParams, lanes, radius_m: float
-                ) -> np.ndarray:
-    """For each open lane ``(left, right)`` of ``lanes`` (index sequences into ``points``,
-    from the car forward): RLD's objective (eq. 29, ``lane_cost``) of the lane with each
-    boundary cut at ``radius_m`` from the car (``within_radius``), plus
-    ``params.w_width_roughness`` times the ``width_roughness`` and ``params.w_turn_roughness``
-    times the sum of the ``turn_roughness`` of the same cut boundaries (ours). (K,) floats,
-    equal to composing those functions lane by lane (tests/test_costs.py), in one compiled
-    loop: CLC's dive judge (``clc.solver.dive_costs``) weighs 5 lanes per call on average, and
-    the Python calls cost more than the arithmetic."""
+def reach_costs(points: np.ndarray, pose: Pose, params: LaneParams, lanes, radius_m: float,
+                colors: np.ndarray | None = None) -> np.ndarray:
+    """For each open lane ``(left, right)`` of ``lanes`` (index sequences into ``points``, from the
+    car forward): RLD's objective (eq. 29, ``lane_cost``) of the lane with each boundary cut at
+    ``radius_m`` from the car (``within_radius``), plus ``params.w_width_roughness`` times the
+    ``width_roughness`` and ``params.w_turn_roughness`` times the sum of the ``turn_roughness`` of
+    the same cut boundaries (ours), plus ``params.w_color`` times their ``boundary_color_cost`` when
+    ``colors`` (side labels) are given. (K,) floats, equal to composing those functions lane by lane
+    (tests/test_costs.py), in one compiled loop: CLC's dive judge (``clc.solver.dive_costs``) weighs
+    5 lanes per call on average, and the Python calls cost more than the arithmetic."""
     if not (isinstance(radius_m, int | float) and math.isfinite(radius_m) and radius_m > 0):
         raise ValueError(f"radius_m must be a positive number of metres, got {radius_m!r}")
     lanes = list(lanes)
@@ -295,21 +392,23 @@ def reach_costs(points: np.ndarray, pose: Pose, params: LaneParams, lanes, radiu
                    float(params.heading_min_distance_m), float(params.w_angle),
                    float(params.angle_tolerance_rad), float(params.w_regularity),
                    math.log(params.regularity_tolerance) if params.w_regularity else 1.0,
-                   float(params.w_width_roughness), float(params.w_turn_roughness), out)
+                   float(params.w_width_roughness), float(params.w_turn_roughness),
+                   np.zeros(0, dtype=np.int64) if colors is None
+                   else np.ascontiguousarray(colors, dtype=np.int64),
+                   float(params.w_color), float(params.near_radius_m), out)
     return out
 
 
 def open_path_costs(points: np.ndarray, flat: np.ndarray, ptr: np.ndarray, pose: Pose,
-                    params: LaneParams, colors: np.ndarray | None = None,
-                    heading: bool = True) -> np.ndarray:
+                    params: LaneParams, heading: bool = True) -> np.ndarray:
     """The edge and turn terms of RLD's objective for many open paths at once: path k is
     ``flat[ptr[k]:ptr[k + 1]]`` (indices into ``points``); returns (K,) the sum of its edge
-    coefficients (eq. 29, ``edge_objective`` with ``colors`` and ``heading``) plus ``w_t``
-    times the angle cost (eq. 20) at its interior cones, 0 for a path of fewer than two cones.
-    ``lane_cost`` sums it over the sides of an open lane; CLC's ``rld_cost`` ranker scores a
-    whole candidate list with it. One compiled loop (``costs_kernels.open_path_costs``) over
-    the same terms as ``edge_objective`` and ``angle_cost``; the colour cost, when given, is
-    added in numpy."""
+    coefficients (eq. 29, ``edge_objective`` with ``heading``) plus ``w_t`` times the angle
+    cost (eq. 20) at its interior cones, 0 for a path of fewer than two cones. ``lane_cost``
+    sums it over the sides of an open lane (and adds the per-cone costs, which need the side);
+    CLC's ``rld_cost`` ranker scores a whole candidate list with it. One compiled loop
+    (``costs_kernels.open_path_costs``) over the same terms as ``edge_objective`` and
+    ``angle_cost``."""
     flat = np.ascontiguousarray(flat, dtype=np.int64)
     ptr = np.ascontiguousarray(ptr, dtype=np.int64)
     out = np.zeros(ptr.size - 1)
@@ -325,11 +424,6 @@ def open_path_costs(points: np.ndarray, flat: np.ndarray, ptr: np.ndarray, pose:
                        float(params.angle_tolerance_rad), float(params.w_regularity),
                        math.log(params.regularity_tolerance) if params.w_regularity else 1.0,
                        out)
-    if colors is not None:
-        owner = np.repeat(np.arange(ptr.size - 1), np.diff(ptr))
-        same = owner[:-1] == owner[1:]
-        edges = np.column_stack([flat[:-1][same], flat[1:][same]])
-        np.add.at(out, owner[:-1][same], params.w_color * color_cost(colors, edges))
     return out
 
 

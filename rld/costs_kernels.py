@@ -302,12 +302,17 @@ def width_roughness(left, right):
 @njit(cache=True)
 def reach_costs(points, lflat, lptr, rflat, rptr, px, py, hx, hy, radius, expected, tolerance,
                 w_spacing, w_benefit, w_heading, min_distance, w_angle, angle_tolerance,
-                w_regularity, log_regularity, w_width_rough, w_turn_rough, out):
+                w_regularity, log_regularity, w_width_rough, w_turn_rough, labels, w_color,
+                near_radius, out):
     """For each open lane k (left ``lflat[lptr[k]:lptr[k + 1]]``, right likewise; indices into
     ``points`` (N, 2), metres), both boundaries cut at ``radius`` from the car (``radius_cut``)
     and ``out[k]`` = RLD's objective of the two cut paths (``open_path_costs``) + w_width_rough
     times their ``width_roughness`` + w_turn_rough times the sum of their ``turn_roughness``
-    (each only when its weight is not 0), added in that order: ``rld.costs.reach_costs``."""
+    (each only when its weight is not 0), with w_color times the cut paths' colour cost
+    (``boundary_color`` of each, ``near_radius`` its start radius) when ``labels`` (side
+    labels, (N,) int64) is not empty, added in the order: objective, colour, width, turn
+    (``rld.costs.lane_cost`` then the roughness gives the same float):
+    ``rld.costs.reach_costs``."""
     two = np.empty(2)
     ptr = np.empty(3, dtype=np.int64)
     for k in range(lptr.shape[0] - 1):
@@ -328,6 +333,11 @@ def reach_costs(points, lflat, lptr, rflat, rptr, px, py, hx, hy, radius, expect
                         w_benefit, w_heading, min_distance, w_angle, angle_tolerance,
                         w_regularity, log_regularity, two)
         cost = 0.0 + (two[0] + two[1])
+        if labels.shape[0] > 0 and w_color != 0.0:
+            cost += w_color * (boundary_color(points, labels, L, False, px, py, hx, hy,
+                                              near_radius)
+                               + boundary_color(points, labels, R, False, px, py, hx, hy,
+                                                near_radius))
         if w_width_rough != 0.0 or w_turn_rough != 0.0:
             lxy = np.empty((L.shape[0], 2))
             rxy = np.empty((R.shape[0], 2))
@@ -342,3 +352,62 @@ def reach_costs(points, lflat, lptr, rflat, rptr, px, py, hx, hy, radius, expect
             if w_turn_rough != 0.0:
                 cost += w_turn_rough * (turn_roughness(lxy) + turn_roughness(rxy))
         out[k] = cost
+
+
+@njit(cache=True)
+def _differ(a, b):
+    """Side labels ``a`` and ``b`` name different sides (0, no side, differs from nothing)."""
+    return a > 0 and b > 0 and a != b
+
+
+@njit(cache=True)
+def car_side(points, i, px, py, hx, hy):
+    """The side of the car (px, py, unit heading hx, hy) cone i lies on, as a side label: 1
+    left (car-frame y > 0), 2 right (y < 0), 0 on the axis."""
+    y = hx * (points[i, 1] - py) - hy * (points[i, 0] - px)
+    return 1 if y > 0.0 else (2 if y < 0.0 else 0)
+
+
+@njit(cache=True)
+def boundary_color(points, labels, path, closed, px, py, hx, hy, near_radius):
+    """The colour cost of one boundary ``path`` (indices into ``points`` and ``labels``, side
+    labels): 1/2 for each edge whose two cones' labels name different sides, 1/2 for each
+    three consecutive cones whose middle one has no side label and whose outer ones name
+    different sides, and (open paths) 1/2 for each end within ``near_radius`` of the car whose
+    label contradicts the side of the car it lies on (``car_side``). 0 for fewer than two
+    cones. ``rld.costs.boundary_color_cost`` says why."""
+    n = path.shape[0]
+    if n < 2:
+        return 0.0
+    total = 0.0
+    for e in range(n if closed and n > 2 else n - 1):
+        if _differ(labels[path[e]], labels[path[(e + 1) % n]]):
+            total += 0.5
+    for t in range(n if closed and n > 2 else n - 2):
+        if labels[path[(t + 1) % n]] == 0 and _differ(labels[path[t]], labels[path[(t + 2) % n]]):
+            total += 0.5
+    if not closed:
+        for end in (path[0], path[n - 1]):
+            if math.hypot(points[end, 0] - px, points[end, 1] - py) <= near_radius and \
+                    _differ(labels[end], car_side(points, end, px, py, hx, hy)):
+                total += 0.5
+    return total
+
+
+@njit(cache=True)
+def lane_color_counts(points, labels, lflat, lptr, rflat, rptr, px, py, hx, hy, near_radius,
+                      radius, out, counted):
+    """For each open lane k (left ``lflat[lptr[k]:lptr[k + 1]]``, right likewise): ``out[k]`` =
+    the ``boundary_color`` of its two boundaries, each cut at ``radius`` from the car (px, py)
+    (``radius_cut``; ``radius`` <= 0: whole), and ``counted[k]`` the cones counted (those of
+    sides of two cones or more): ``rld.costs.lane_color_costs``."""
+    for k in range(lptr.shape[0] - 1):
+        L = lflat[lptr[k]:lptr[k + 1]]
+        R = rflat[rptr[k]:rptr[k + 1]]
+        if radius > 0.0:
+            L = L[:radius_cut(points, L, px, py, radius)]
+            R = R[:radius_cut(points, R, px, py, radius)]
+        out[k] = (boundary_color(points, labels, L, False, px, py, hx, hy, near_radius)
+                  + boundary_color(points, labels, R, False, px, py, hx, hy, near_radius))
+        counted[k] = (L.shape[0] if L.shape[0] >= 2 else 0) + \
+            (R.shape[0] if R.shape[0] >= 2 else 0)

@@ -19,7 +19,7 @@ from rld.constraints import (
     lane_is_feasible,
     width_conflicts,
 )
-from rld.costs import lane_cost
+from rld.costs import boundary_color_cost, lane_cost
 from rld.solver import MATCH_TOLERANCE_M, RldModel
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
@@ -76,6 +76,7 @@ class IncrementalRld:
         self.rollbacks = 0
         self.insertions = 0
         self.prev_map: np.ndarray | None = None  # the last call's map, to tell new cones
+        self._colors: np.ndarray | None = None  # this call's side labels (``solve``)
         self.reset()
 
     def reset(self) -> None:
@@ -135,7 +136,8 @@ class IncrementalRld:
             lane = self.frontier.solve(
                 points, vpose, time_limit_s=time_limit_s, start=(ql, qr),
                 fixed_edges=[(ql, al), (qr, ar)], window=window, heading=False,
-                fixed_lane=self._kept_edges(points, kl[:-1], kr[:-1], window))
+                fixed_lane=self._kept_edges(points, kl[:-1], kr[:-1], window),
+                colors=self._colors)
             if not lane.ok:
                 continue
             fl, fr = lane.left, lane.right
@@ -174,7 +176,8 @@ class IncrementalRld:
         ``lane_cost`` over the edges and turns it changes) and breaks no constraint (turn
         limit, and the shared crossing and width families against the rest of the lane).
         A cone the perception saw late (in a hairpin, say) is then not skipped for good
-        once the frontier has moved on. Returns (L, R, insertions)."""
+        once the frontier has moved on. With colours the objective counts the colour cost
+        (``rld.costs.boundary_color_cost``) too. Returns (L, R, insertions)."""
         if prev_map is None or prev_map.shape[0] == 0:
             return L, R, 0
         p = self.params
@@ -222,8 +225,15 @@ class IncrementalRld:
                             p.min_width_m).any():
             return None
         pose = Pose(0.0, 0.0, 0.0)  # no heading term: the pose does not enter the cost
-        return lane_cost(points, with_c, [], pose, p, heading=False) - \
+        delta = lane_cost(points, with_c, [], pose, p, heading=False) - \
             lane_cost(points, local, [], pose, p, heading=False)
+        if self._colors is not None:
+            # The colour cost's edge and skip terms that the insertion changes; the window's
+            # ends are no boundary ends (a start radius of -1 m: no start term).
+            delta += p.w_color * (
+                boundary_color_cost(points, self._colors, with_c, pose, -1.0)
+                - boundary_color_cost(points, self._colors, local, pose, -1.0))
+        return delta
 
     def _kept_edges(self, points, kl, kr, window) -> np.ndarray:
         """The kept lane's edges (both sides, up to the junctions) that come near the frontier
@@ -334,7 +344,7 @@ class IncrementalRld:
             stats["restart_reason"] = reason
             self.reset()
         self.prev_pose, self.n_map = pose, points.shape[0]
-        lane = self.window.solve(points, pose, time_limit_s=time_limit_s)
+        lane = self.window.solve(points, pose, time_limit_s=time_limit_s, colors=self._colors)
         stats.update({k: lane.stats[k] for k in ("n_cones_used", "horizon_m")
                       if k in lane.stats})
         if not lane.ok:
@@ -348,10 +358,13 @@ class IncrementalRld:
               colors=None, confidence=None) -> Lane:
         """One map update: ``points`` (N, 2) metres, validated; ``pose`` the car's. The
         budget ``time_limit_s`` bounds each program solve (a call with rollbacks makes up to
-        ``max_rollbacks + 2`` of them)."""
+        ``max_rollbacks + 2`` of them). ``colors`` (side labels): the colour cost
+        (``rld.costs.boundary_color_cost``, weight ``w_color``) in every program and
+        insertion."""
         stats: dict = {}
-        if colors is not None or confidence is not None:
-            stats["note"] = "the incremental solver ignores colors and confidence"
+        self._colors = colors
+        if confidence is not None:
+            stats["note"] = "the incremental solver ignores confidence"
         prev_map, self.prev_map = self.prev_map, np.array(points, dtype=np.float64)
         if self.left_xy is None:
             return self._start(points, pose, time_limit_s, stats)

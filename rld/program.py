@@ -244,7 +244,9 @@ def build_program(
     relaxation pay the angle costs). ``sided`` builds our side-aware formulation: a set of
     columns per side, each side one path starting near the car on its own side, and the lane
     width bounded at the cones (see docs/formulation.md). ``colors`` (0 unknown, 1 left, 2
-    right) and ``confidence`` (0..1) per cone add the colour and confidence costs.
+    right; ``rld.colors`` side labels) and ``confidence`` (0..1) per cone add the colour cost
+    (``costs.boundary_color_cost``: its terms on the edge, angle and near endpoint columns) and
+    the confidence cost.
     ``heading=False`` drops the heading row (eq. 9 / 33) and the heading cost (eq. 25): for a
     program whose start is fixed together with its first edges (``rld.incremental``'s
     frontier), which give the direction that the heading terms stand in for.
@@ -283,7 +285,9 @@ def build_program(
         near[list(start)] = True
     # A side's first cone beyond the near radius (start_mask): its edges count for eq. 9.
     first = np.flatnonzero(near & ~cons.near_car_mask(points, pose, p.near_radius_m))
-    edge_cost = costs.edge_objective(points, edges, pose, p, colors, heading=heading)
+    edge_cost = costs.edge_objective(points, edges, pose, p, heading=heading)
+    if colors is not None:
+        edge_cost = edge_cost + p.w_color * costs.color_edge_cost(colors, edges)
     cone_cost = np.zeros(N)
     if confidence is not None:
         cone_cost += p.w_confidence * costs.confidence_cost(confidence)
@@ -314,8 +318,9 @@ def build_program(
             c[f0:g0] += p.w_regularity * costs.regularity_cost(
                 lengths[triples[:, 3]], lengths[triples[:, 4]], p.regularity_tolerance)
         c[g0:m0] = cone_cost
-        if sided and colors is not None:
-            c[g0:m0] += p.w_color * (colors == (2 if k == 0 else 1))
+        if colors is not None:
+            c[f0:g0] += p.w_color * costs.color_skip_cost(colors, triples)
+            c[m0:m0 + N] += p.w_color * near * costs.color_start_cost(points, colors, pose)
         _path_rows(rows, edges, triples, forbidden_pairs, N, a0, f0, g0, m0, strengthen)
     if not sided:
         a0, f0, g0, m0 = blocks[0]

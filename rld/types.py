@@ -123,7 +123,8 @@ def as_cones(cones: Any, min_cones: int = MIN_CONES) -> np.ndarray:
 _MAY_BE_ZERO = ("window_behind_m", "nvd_distance_weight", "nvd_lookahead_weight",
                 "contested_margin", "skipped_cone_m", "start_min_width_m", "start_behind_m",
                 "start_lookback_m", "start_reach_m", "duplicate_radius_m",
-                "w_regularity", "w_width_roughness", "w_turn_roughness")
+                "w_regularity", "w_width_roughness", "w_turn_roughness", "w_color",
+                "nvd_color_weight", "rank_color_weight")
 
 
 @dataclass(frozen=True)
@@ -189,9 +190,9 @@ class LaneParams:
     lengths that costs 1, dimensionless, above 1. Chosen by measurement of the true edges:
     docs/tuning.md#regularity_tolerance."""
     w_color: float = 2.0
-    """Weight of the colour cost (ours; RLD section V's future work): paid for an edge joining
-    cones labelled left and right, and in the sided formulation for a cone on the side opposite
-    its label; only with ``colors``. Source: our first choice."""
+    """Weight of the colour cost (``rld.costs.boundary_color_cost``, 1 per contradicting cone), RLD
+    units (eq. 29); the RLD forms and CLC's dive judge; 0 turns it off. Chosen by measurement:
+    docs/tuning.md#w_color."""
     w_confidence: float = 1.0
     """Weight of the confidence cost (ours; RLD section V): w (1 - confidence) for every cone the
     lane uses; only with ``confidence``. Source: our first choice."""
@@ -229,6 +230,14 @@ class LaneParams:
     """Look-ahead of CLC's next-vertex decider (ours, dimensionless): an option's score adds this
     times the best score of the step after it, so a cone that only a sharp turn can leave ranks
     lower; 0 is the one-step decider. Chosen by measurement: docs/tuning.md#nvd_lookahead_weight."""
+    nvd_color_weight: float = 0.5
+    """Radians added to CLC's next-vertex decider score of a cone whose class contradicts the side
+    being extended (``clc.search.color_penalties``); 0 turns it off. Chosen by measurement:
+    docs/tuning.md#nvd_color_weight."""
+    rank_color_weight: float = 1.0
+    """Subtracted from CLC's ranker score times the share of a lane's cones within 25 m whose
+    class contradicts their side (``clc.solver.ClcModel._score``; ranker units); 0: off. Chosen
+    by measurement: docs/tuning.md#rank_color_weight."""
     contested_margin: float = 0.2
     """CLC's contested-choice dives (ours; ``clc.search.contested_dives``): a choice of the lane
     whose runner-up scored at most this much higher in the next-vertex decider (its radians) is

@@ -1013,7 +1013,7 @@ def test_dive_judge_counts_within_the_reach_track4(dataset_dir, monkeypatch):
     assert set(f.gt_right.tolist()) <= set(lane.right.tolist())
     from rld.costs import turn_roughness, width_roughness, within_radius
 
-    def whole_lane(points, pose, params, lanes, radius_m):
+    def whole_lane(points, pose, params, lanes, radius_m, colors=None):
         """The judge of open lanes with the objective over the whole lanes (no radius), the
         roughness terms still within it."""
         out = []

@@ -7,6 +7,7 @@ import pytest
 import yaml
 from click.testing import CliRunner
 
+from rld import LaneParams
 from rld.cli import main
 from rld.tracks import Track, write_csv
 
@@ -283,8 +284,9 @@ def test_solve_honours_backend_time_limit_and_param(tmp_path):
 
 
 def test_solve_reads_colours(tmp_path):
-    """The sided RLD program charges w_color for a cone on the side opposite to its label:
-    labels swapped cost 20 cones x w_color more than the right ones, on the same lane."""
+    """The RLD programs charge w_color times the colour cost (``rld.costs.boundary_color_cost``):
+    labels swapped throughout leave the lane and cost its two starts on the wrong class,
+    1/2 each, more than the right ones."""
     right = _colour_csv(tmp_path / "right.csv")
     swapped = _colour_csv(tmp_path / "swapped.csv", labels=("right", "left"), column="Colour")
 
@@ -299,8 +301,9 @@ def test_solve_reads_colours(tmp_path):
         return doc["cost"]
 
     base = cost(right)
-    assert cost(swapped) - base == pytest.approx(20 * 2.0)  # LaneParams.w_color = 2.0
-    assert cost(swapped, "--param", "w_color=0.5") - base == pytest.approx(20 * 0.5)
+    w = LaneParams().w_color
+    assert cost(swapped) - base == pytest.approx(2 * 0.5 * w)
+    assert cost(swapped, "--param", "w_color=0.5") - base == pytest.approx(2 * 0.5 * 0.5)
     # An empty cell is unknown: no label, no colour cost.
     text = right.read_text().replace(",left\n", ",\n").replace(",right\n", ",\n")
     right.write_text(text)

@@ -292,8 +292,7 @@ def _reference_path_cost(pts, path, pose, p, heading=True):
        yaw=st.floats(-math.pi, math.pi))
 def test_open_path_costs_against_a_loop(seed, sizes, regularity, heading, yaw):
     """The compiled batch (``costs_kernels.open_path_costs``) equals the plain loop for every
-    path of a random batch, paths of 0 and 1 cone costing 0; colours add w_color per edge
-    joining a left-labelled to a right-labelled cone."""
+    path of a random batch, paths of 0 and 1 cone costing 0."""
     rng = np.random.default_rng(seed)
     pts = rng.uniform(-20, 20, size=(30, 2))
     pose = Pose(float(rng.uniform(-5, 5)), float(rng.uniform(-5, 5)), yaw)
@@ -304,12 +303,90 @@ def test_open_path_costs_against_a_loop(seed, sizes, regularity, heading, yaw):
     got = costs.open_path_costs(pts, flat, ptr, pose, p, heading=heading)
     want = [_reference_path_cost(pts, q, pose, p, heading) for q in paths]
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
-    colors = rng.integers(0, 3, size=30)
-    mixed = [sum(int(colors[a] > 0 and colors[b] > 0 and colors[a] != colors[b])
-                 for a, b in zip(q[:-1], q[1:], strict=True)) for q in paths]
-    np.testing.assert_allclose(
-        costs.open_path_costs(pts, flat, ptr, pose, p, colors=colors, heading=heading),
-        np.array(want) + p.w_color * np.array(mixed), rtol=1e-9, atol=1e-9)
+
+
+def _reference_boundary_color(pts, labels, idx, pose, near_m, closed=False):
+    """``boundary_color_cost`` as its docstring states it, in plain Python."""
+    idx = [int(i) for i in idx]
+    n = len(idx)
+    if n < 2:
+        return 0.0
+    def differ(a, b):
+        return a > 0 and b > 0 and a != b
+    ring = closed and n > 2
+    pairs = [(idx[e], idx[(e + 1) % n]) for e in range(n if ring else n - 1)]
+    triples = [(idx[t], idx[(t + 1) % n], idx[(t + 2) % n]) for t in range(n if ring else n - 2)]
+    total = 0.5 * sum(differ(labels[a], labels[b]) for a, b in pairs)
+    total += 0.5 * sum(labels[j] == 0 and differ(labels[i], labels[k]) for i, j, k in triples)
+    if not closed:
+        y = pose.to_local(pts)[:, 1]
+        for e in (idx[0], idx[-1]):
+            side = 1 if y[e] > 0 else 2 if y[e] < 0 else 0
+            if math.hypot(*(pts[e] - pose.xy)) <= near_m and differ(labels[e], side):
+                total += 0.5
+    return total
+
+
+@given(seed=st.integers(0, 10_000), n=st.integers(0, 8), closed=st.booleans())
+def test_boundary_color_cost_against_its_statement(seed, n, closed):
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(-8, 8, size=(12, 2))
+    pose = Pose(0.3, -0.2, float(rng.uniform(-3, 3)))
+    labels = rng.integers(0, 3, size=12)
+    idx = rng.permutation(12)[:n]
+    assert costs.boundary_color_cost(pts, labels, idx, pose, 4.5, closed) == \
+        _reference_boundary_color(pts, labels, idx, pose, 4.5, closed)
+
+
+def test_boundary_color_cost_hand_worked():
+    # A left boundary along y = 2, cones 3 m apart, labelled left, left, right, left, left,
+    # unknown, right (side labels). From its second cone: the right-labelled cone's two edges
+    # cost 1/2 each, the left - unknown - right run 1/2, the start is left-labelled on the car's
+    # left: 1.5. Its first four cones: 1. Every cone labelled right: the start alone, 1/2; no
+    # start term when the start is beyond the near radius.
+    pts = np.column_stack([np.arange(7) * 3.0, np.full(7, 2.0)])
+    car = Pose(0.0, 0.0, 0.0)
+    idx = np.arange(7)
+    labels = np.array([1, 1, 2, 1, 1, 0, 2])
+    assert costs.boundary_color_cost(pts, labels, idx[1:], car, 4.5) == 1.5
+    assert costs.boundary_color_cost(pts, labels, idx[:4], car, 4.5) == 1.0
+    assert costs.boundary_color_cost(pts, np.full(7, 2), idx, car, 4.5) == 0.5
+    assert costs.boundary_color_cost(pts, np.full(7, 2), idx, car, 1.0) == 0.0
+    assert costs.boundary_color_cost(pts, labels, idx[:1], car, 4.5) == 0.0
+
+
+@given(seed=st.integers(0, 10_000), k=st.integers(0, 6), radius=st.sampled_from([None, 9.0]),
+       share=st.booleans())
+def test_lane_color_costs_against_a_loop(seed, k, radius, share):
+    """``lane_color_costs``: per lane, the ``boundary_color_cost`` of each side (cut at the
+    radius), or over the cones of the sides of two or more; a candidate list and a list of
+    pairs alike."""
+    from clc.search import CandidateList
+
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(-15, 15, size=(25, 2))
+    pose = Pose(0.5, -0.5, 0.2)
+    colors = rng.integers(0, 3, size=25)
+    lanes = [(rng.permutation(25)[:rng.integers(0, 7)], rng.permutation(25)[:rng.integers(0, 7)])
+             for _ in range(k)]
+    want = []
+    for left, right in lanes:
+        n = wrong = 0
+        for idx in (left, right):
+            if radius is not None:
+                idx = costs.within_radius(pts, idx, pose, radius)
+            if len(idx) >= 2:
+                n += len(idx)
+            wrong += costs.boundary_color_cost(pts, colors, idx, pose, 3.0)
+        want.append(wrong / max(n, 1) if share else wrong)
+    got = costs.lane_color_costs(pts, colors, lanes, pose, radius, share=share, near_radius_m=3.0)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    if k:
+        flat = [np.concatenate([lane[s] for lane in lanes]).astype(np.int64) for s in (0, 1)]
+        ptr = [np.r_[0, np.cumsum([len(lane[s]) for lane in lanes])] for s in (0, 1)]
+        cands = CandidateList(flat[0], ptr[0], flat[1], ptr[1])
+        np.testing.assert_allclose(costs.lane_color_costs(
+            pts, colors, cands, pose, radius, share=share, near_radius_m=3.0), want)
 
 
 @given(seed=st.integers(0, 10_000), n=st.integers(0, 9), radius=st.floats(0.5, 30.0))
@@ -327,25 +404,28 @@ def test_within_radius_against_the_mask(seed, n, radius):
 
 
 @given(seed=st.integers(0, 10_000), k=st.integers(0, 5), radius=st.floats(2.0, 30.0),
-       regularity=st.sampled_from([0.0, 0.3]), rough=st.sampled_from([(0.0, 0.0), (0.4, 0.7)]))
-def test_reach_costs_compose_the_shared_terms(seed, k, radius, regularity, rough):
-    """Lane by lane, ``reach_costs`` is ``lane_cost(radius_m=...)`` plus the width and turn
-    roughness of the boundaries cut by ``within_radius``, each times its weight, added in
-    that order: the same float, not merely close (CLC's judge picks by strict comparison)."""
+       regularity=st.sampled_from([0.0, 0.3]), rough=st.sampled_from([(0.0, 0.0), (0.4, 0.7)]),
+       color=st.sampled_from([None, 2.0, 0.7]))
+def test_reach_costs_compose_the_shared_terms(seed, k, radius, regularity, rough, color):
+    """Lane by lane, ``reach_costs`` is ``lane_cost(radius_m=...)`` (with the colour cost when
+    side labels are given) plus the width and turn roughness of the boundaries cut by
+    ``within_radius``, each times its weight, added in that order: the same float, not merely
+    close (CLC's judge picks by strict comparison)."""
     rng = np.random.default_rng(seed)
     pts = rng.uniform(-20, 20, size=(30, 2))
     pose = Pose(float(rng.uniform(-3, 3)), float(rng.uniform(-3, 3)), float(rng.uniform(-3, 3)))
     p = LaneParams(w_regularity=regularity, w_width_roughness=rough[0],
-                   w_turn_roughness=rough[1])
+                   w_turn_roughness=rough[1], w_color=color or 2.0)
+    colors = None if color is None else rng.integers(0, 3, size=30)
     lanes = []
     for _ in range(k):
         perm = rng.permutation(30)
         a, b = int(rng.integers(0, 9)), int(rng.integers(0, 9))
         lanes.append((perm[:a], perm[a:a + b]))
-    got = costs.reach_costs(pts, pose, p, lanes, radius)
+    got = costs.reach_costs(pts, pose, p, lanes, radius, colors)
     assert got.shape == (k,)
     for (left, right), g in zip(lanes, got, strict=True):
-        want = costs.lane_cost(pts, left, right, pose, p, radius_m=radius)
+        want = costs.lane_cost(pts, left, right, pose, p, radius_m=radius, colors=colors)
         a = costs.within_radius(pts, left, pose, radius)
         b = costs.within_radius(pts, right, pose, radius)
         if p.w_width_roughness:

@@ -13,6 +13,7 @@ import pytest
 from rld import LaneParams, LaneSolver, LaneStatus, Pose, costs, solve_lane
 from rld import constraints as C
 from rld.backends import make_backend
+from rld.colors import SIDE_LEFT, SIDE_RIGHT
 from rld.geometry import polyline_turn_angles, segment_distance_end, segments_intersect
 from rld.program import build_program, extract_paths
 from rld.solver import RldModel
@@ -431,20 +432,43 @@ def test_regularity_cost_changes_the_optimum():
 
 
 def test_colour_and_confidence_costs_hand_worked():
-    colors = np.array([0, 1, 2, 1])
+    # Side labels (rld.colors): 0 unknown, 1 left, 2 right.
+    labels = np.array([0, 1, 2, 1])
+    assert costs.color_cost(labels, SIDE_LEFT).tolist() == [0, 0, 1, 0]
+    assert costs.color_cost(labels, SIDE_RIGHT).tolist() == [0, 1, 0, 1]
     edges = np.array([[0, 1], [1, 2], [1, 3], [2, 3]])
-    assert costs.color_cost(colors, edges).tolist() == [0, 1, 0, 1]
+    assert costs.color_edge_cost(labels, edges).tolist() == [0, 0.5, 0, 0.5]
+    triples = np.array([[1, 0, 2], [1, 0, 3], [0, 1, 2], [1, 2, 3]])
+    assert costs.color_skip_cost(labels, triples).tolist() == [0.5, 0, 0, 0]
     np.testing.assert_allclose(costs.confidence_cost([1.0, 0.25, 0.0]), [0.0, 0.75, 1.0])
     p = LaneParams()
     pts = np.array([[0, 2], [3.5, 2], [0, -2], [3.5, -2]], float)
-    base = costs.lane_cost(pts, [0, 1], [2, 3], Pose(0, 0, 0), p)
-    wrong = np.array([2, 1, 2, 2])  # cone 0 labelled right but on the left
-    with_col = costs.lane_cost(pts, [0, 1], [2, 3], Pose(0, 0, 0), p, colors=wrong)
-    assert with_col == pytest.approx(base + p.w_color)  # the edge 0-1 joins right to left
-    sided = costs.lane_cost(pts, [0, 1], [2, 3], Pose(0, 0, 0), p, colors=wrong, sided=True)
-    assert sided == pytest.approx(base + 2 * p.w_color)  # and cone 0 sits on the wrong side
-    conf = costs.lane_cost(pts, [0, 1], [2, 3], Pose(0, 0, 0), p,
-                           confidence=np.array([1, 0.5, 1, 0.0]))
+    car = Pose(-1.0, 0.0, 0.0)  # cones 0 and 2 within near_radius_m (4.5 m), 1 and 3 not
+    assert costs.color_start_cost(pts, np.array([2, 0, 2, 1]), car).tolist() == [0.5, 0, 0, 0.5]
+    # By hand: two 3.5 m edges along the heading, spacing and heading costs 0, so each edge
+    # is -w_b = -2.5 and the lane -5.
+    base = costs.lane_cost(pts, [0, 1], [2, 3], car, p)
+    assert base == pytest.approx(-5.0)
+    # Cone 0 labelled right on the left: its edge joins two sides' labels (1/2) and the left
+    # boundary starts on the right's class beside the car (1/2): -5 + 1 * w_color (2) = -3.
+    wrong = np.array([2, 1, 2, 2])
+    for sided in (False, True):  # one colour cost for every form
+        assert costs.lane_cost(pts, [0, 1], [2, 3], car, p, colors=wrong, sided=sided) == \
+            pytest.approx(-3.0)
+    # Every label swapped: only the two starts contradict their side, -5 + 2 * 1/2 * 2 = -3;
+    # cone 1 alone swapped as well, its edge too: -5 + 1.5 * 2 = -2.
+    assert costs.lane_cost(pts, [0, 1], [2, 3], car, p, colors=np.array([2, 2, 1, 1])) == \
+        pytest.approx(-3.0)
+    assert costs.lane_cost(pts, [0, 1], [2, 3], car, p, colors=np.array([2, 1, 1, 1])) == \
+        pytest.approx(-2.0)
+    # The programs charge the same: their optimum is that lane at that cost, both forms
+    # (class codes: 1 yellow, right; 2 blue, left).
+    for method in ("rld", "rld-sided"):
+        lane = solve_lane(pts, car, method=method, colors=[1, 2, 1, 1], time_limit_s=5,
+                          backend="highs")
+        assert lane.left.tolist() == [0, 1] and lane.right.tolist() == [2, 3]
+        assert lane.cost == pytest.approx(-3.0)
+    conf = costs.lane_cost(pts, [0, 1], [2, 3], car, p, confidence=np.array([1, 0.5, 1, 0.0]))
     assert conf == pytest.approx(base + p.w_confidence * 1.5)
 
 
