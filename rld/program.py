@@ -262,6 +262,8 @@ def build_program(
     lengths = cons.edge_lengths(points, edges)
     s_cost = costs.spacing_cost(lengths, p.expected_spacing_m, p.spacing_tolerance_m)
     edge_bad = (lengths > p.max_cone_spacing_m) | costs.high_cost_mask(s_cost, p.max_spacing_cost)
+    if start is not None:  # a fixed start's first edges run ahead (cons.first_edges_ahead)
+        edge_bad |= _backward_from(points, edges, start, pose, p.max_turn_angle_rad)
     if prune:
         edges, lengths, s_cost = edges[~edge_bad], lengths[~edge_bad], s_cost[~edge_bad]
         edge_bad = edge_bad[~edge_bad]
@@ -417,6 +419,20 @@ def _path_rows(rows: _Rows, edges, triples, forbidden_pairs, N, a0, f0, g0, m0,
              np.concatenate([f0 + inc_f, a0 + pairs[:, 1], m0 + pairs[:, 0]]),
              np.concatenate([np.ones(row_of.size), -np.ones(K), np.ones(K)]),
              np.zeros(K), np.inf, "angle_cover")
+
+
+def _backward_from(points, edges, start, pose: Pose, max_turn_rad: float) -> np.ndarray:
+    """Edges at a start cone leaving it more than ``max_turn_rad`` off the car's heading,
+    boolean (E,): CLC's first-edge rule (``cons.first_edges_ahead``) as columns (ours)."""
+    bad = np.zeros(edges.shape[0], dtype=bool)
+    h = pose.heading
+    for s in start:
+        for a, b in ((0, 1), (1, 0)):
+            at = edges[:, a] == s
+            d = points[edges[at, b]] - points[s]
+            turn = np.abs(np.arctan2(h[0] * d[:, 1] - h[1] * d[:, 0], d @ h))
+            bad[np.flatnonzero(at)[turn > max_turn_rad]] = True
+    return bad
 
 
 def _sided_rows(rows: _Rows, points, pose, p, blocks, near, start, h, wc, cr, fi, fj) -> None:

@@ -582,3 +582,14 @@ def test_heading_row_is_kept_when_a_lane_meets_it():
     lane = solve_lane(points, Pose(0.5, 0.0, 0.0), method="rld")
     assert lane.ok and "heading_relaxed" not in lane.stats
     assert lane.left.tolist() == list(range(6)) and lane.right.tolist() == list(range(6, 12))
+
+
+def test_a_fixed_start_drops_its_backward_first_edges():
+    # Start cone 0 at (0, 1) beside the car at the origin heading +x: its edge to (3, 1) runs
+    # ahead (0 rad), its edge to (-3, 1) behind (pi rad > pi/2), its edge to (1, 4) at 1.25 rad.
+    from rld.program import _backward_from
+
+    pts = np.array([[0.0, 1.0], [3.0, 1.0], [-3.0, 1.0], [1.0, 4.0], [0.0, -1.0]])
+    edges = np.array([[0, 1], [0, 2], [3, 0], [1, 2]])
+    bad = _backward_from(pts, edges, (0, 4), Pose(0.0, 0.0, 0.0), math.pi / 2)
+    assert bad.tolist() == [False, True, False, False]
