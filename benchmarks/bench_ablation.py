@@ -466,6 +466,11 @@ def compare(base: dict, var: dict, resamples: int = RESAMPLES, seed: int = 0,
             idx = [keys.index(k) for k in sel]
             out[f"geo_{d:g}m_fp{fp:g}"] = ratio_interval(diff[idx], n_all[idx],
                                                          [cell(k) for k in sel], resamples, seed)
+        for part in ("shared", "generated"):
+            idx = [i for i, k in enumerate(keys) if base[k]["part"] == part]
+            if idx:
+                out[f"geo_{d:g}m_{part}"] = ratio_interval(
+                    diff[idx], n_all[idx], [cell(keys[i]) for i in idx], resamples, seed)
     dlen = sums(keys, lambda a, b: 100.0 * (_len(b["pred_length_m"]) - _len(a["pred_length_m"])))
     true = sums(keys, lambda a, b: _len(a["true_length_m"]))
     out["length"] = ratio_interval(dlen, true, [cell(k) for k in keys], resamples, seed)
@@ -578,6 +583,21 @@ def fp_markdown(results: dict[str, dict], variants: Sequence[Variant], set_name:
     return "\n".join(lines)
 
 
+def part_markdown(results: dict[str, dict], variants: Sequence[Variant]) -> str:
+    """Per part of the set (the shared tracks, the generated set): the differences of the
+    geometric rates at 1 m and 0.5 m, with 95 % intervals."""
+    parts = ("shared", "generated")
+    lines = ["| variant |" + "".join(f" 1 m, {p} | 0.5 m, {p} |" for p in parts),
+             "|---|" + "---|---|" * len(parts)]
+    for v in variants:
+        r = results.get(v.name)
+        if not r or not r.get("laps"):
+            continue
+        lines.append(f"| `{v.name}` |" + "".join(
+            f" {_ci(r.get(f'geo_1m_{p}'))} | {_ci(r.get(f'geo_0.5m_{p}'))} |" for p in parts))
+    return "\n".join(lines)
+
+
 def baseline_line(results: dict[str, dict], set_name: str) -> str:
     r = next((x for x in results.values() if x.get("laps")), None)
     if r is None:
@@ -660,7 +680,8 @@ def main(argv: Sequence[str] | None = None) -> None:
              "", markdown(results, variants)]
     for s in results:
         parts += ["", f"Per false-positive rate, {s}:", "",
-                  fp_markdown(results[s], variants, s, fp_rates)]
+                  fp_markdown(results[s], variants, s, fp_rates),
+                  "", f"Per part of the set, {s}:", "", part_markdown(results[s], variants)]
     text = "\n".join(parts)
     print(text)
     if args.markdown:
