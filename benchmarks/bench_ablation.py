@@ -488,6 +488,23 @@ def compare(base: dict, var: dict, resamples: int = RESAMPLES, seed: int = 0,
                                         [cell(k) for k in keys], resamples, seed)
     out["base_latency_ms"] = float(np.median(la))
     out["verdict"] = verdict([out[f"geo_{d:g}m"] for d in GEO_M])
+    # A cell of one lap is always drawn whole: its interval is a point, not evidence.
+    cells = [cell(k) for k in keys]
+    out["fewest_laps_per_cell"] = min(cells.count(c) for c in set(cells))
+    # Sensitivity: whole tracks as the unit (all laps of a drawn track, within its part), for
+    # laps of one track are not independent across seeds, ranges and rates.
+    tracks = sorted({(base[k]["part"], base[k]["track"]) for k in keys})
+    of = np.array([tracks.index((base[k]["part"], base[k]["track"])) for k in keys])
+    t_n = np.bincount(of, weights=n_all, minlength=len(tracks))
+    for d in GEO_M:
+        diff = sums(keys, lambda a, b, d=d: 100.0 * ((b["deviation_m"] > d)
+                                                     - (a["deviation_m"] > d)))
+        out[f"geo_{d:g}m_by_track"] = ratio_interval(
+            np.bincount(of, weights=diff, minlength=len(tracks)), t_n,
+            [p for p, _ in tracks], resamples, seed)
+    out["verdict_by_track"] = verdict([out[f"geo_{d:g}m_by_track"] for d in GEO_M])
+    if out["fewest_laps_per_cell"] < 2:
+        out["verdict"] = out["verdict_by_track"] = "too few laps"
     return out
 
 
@@ -598,6 +615,21 @@ def part_markdown(results: dict[str, dict], variants: Sequence[Variant]) -> str:
     return "\n".join(lines)
 
 
+def track_markdown(results: dict[str, dict], variants: Sequence[Variant]) -> str:
+    """The sensitivity of the verdict to the bootstrap's unit: whole tracks (within each part
+    of the set) instead of laps."""
+    lines = ["| variant | 1 m, tracks resampled | 0.5 m, tracks resampled | verdict (laps) | "
+             "verdict (tracks) |", "|---|---|---|---|---|"]
+    for v in variants:
+        r = results.get(v.name)
+        if not r or not r.get("laps"):
+            continue
+        lines.append(f"| `{v.name}` | {_ci(r.get('geo_1m_by_track'))} | "
+                     f"{_ci(r.get('geo_0.5m_by_track'))} | {r['verdict']} | "
+                     f"{r['verdict_by_track']} |")
+    return "\n".join(lines)
+
+
 def baseline_line(results: dict[str, dict], set_name: str) -> str:
     r = next((x for x in results.values() if x.get("laps")), None)
     if r is None:
@@ -681,7 +713,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     for s in results:
         parts += ["", f"Per false-positive rate, {s}:", "",
                   fp_markdown(results[s], variants, s, fp_rates),
-                  "", f"Per part of the set, {s}:", "", part_markdown(results[s], variants)]
+                  "", f"Per part of the set, {s}:", "", part_markdown(results[s], variants),
+                  "", f"Whole tracks as the bootstrap's unit, {s}:", "",
+                  track_markdown(results[s], variants)]
     text = "\n".join(parts)
     print(text)
     if args.markdown:

@@ -48,7 +48,7 @@ def _results(critical: dict[str, list[bool]], fp=0.3, latency=0.005, length=10.0
     (critical: deviation 2 m, else 0.1 m)."""
     out = {}
     for key, flags in critical.items():
-        out[key] = {"unit": key, "part": "shared", "range_m": 50.0, "fp_rate": fp,
+        out[key] = {"unit": key, "part": "shared", "track": key, "range_m": 50.0, "fp_rate": fp,
                     "records": [{"pose": 4 * i, "deviation_m": 2.0 if c else 0.1,
                                  "pred_length_m": length, "true_length_m": 10.0,
                                  "latency_s": latency, "first_call": i == 0}
@@ -72,6 +72,9 @@ def test_compare_pairs_the_poses():
     assert r["length"] == pytest.approx((-10.0, -10.0, -10.0))  # 9 m of 10, from 10 m of 10
     assert r["latency_ms"] == pytest.approx((2.0, 2.0, 2.0))  # first calls left out
     assert r["verdict"] == "keep"
+    # Each lap its own track here: whole tracks resampled give the same answer.
+    assert r["geo_1m_by_track"] == pytest.approx((10.0, 10.0, 10.0))
+    assert r["verdict_by_track"] == "keep"
 
 
 def test_compare_identical_runs_remove():
@@ -153,3 +156,11 @@ def test_run_lap_records_agree_with_run_protocol():
             assert r.true_length_m == g["true_length_m"]
             assert (r.deviation_m == g["deviation_m"]
                     or (math.isinf(r.deviation_m) and math.isinf(g["deviation_m"])))
+
+
+def test_compare_gives_no_verdict_on_one_lap_a_cell():
+    base = _results({"a": [False] * 5})
+    var = _results({"a": [True] + [False] * 4})
+    r = B.compare(base, var, resamples=50)
+    assert r["geo_1m"] == pytest.approx((20.0, 20.0, 20.0))  # a point: one lap, always drawn
+    assert r["verdict"] == "too few laps"
