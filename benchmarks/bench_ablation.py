@@ -140,6 +140,16 @@ SETS = {"choosing": ((0, 1, 2, 3, 4), "choosing", 0),
         "reporting": ((5, 6, 7, 8, 9), "reporting", 5)}
 
 
+def combined(variants: Sequence[Variant], name: str = "combined") -> Variant:
+    """One variant with every switch of ``variants`` at once (a check that additions judged
+    one at a time do not matter together)."""
+    params, constants = {}, {}
+    for v in variants:
+        params.update(v.params)
+        constants.update(v.constants)
+    return Variant(name, "together: " + ", ".join(v.name for v in variants), params, constants)
+
+
 def variants_by_name(names: Sequence[str] | None = None) -> list[Variant]:
     """The baseline and the named variants (all when ``names`` is None), baseline first."""
     known = {v.name: v for v in VARIANTS}
@@ -298,8 +308,10 @@ def result_path(out: str | Path, set_name: str, variant: str) -> Path:
     return Path(out) / set_name / f"{variant}.jsonl"
 
 
-def read_results(path: Path) -> dict[str, dict]:
-    """{lap key: line} of a result file (the last line of a key wins); {} when missing."""
+def read_results(path: Path, every: int | None = None,
+                 switch: str | None = None) -> dict[str, dict]:
+    """{lap key: line} of a result file (the last line of a key wins), only the lines of
+    ``every`` and ``switch`` when given; {} when missing."""
     done = {}
     if path.exists():
         with path.open() as f:
@@ -310,7 +322,9 @@ def read_results(path: Path) -> dict[str, dict]:
                         d = json.loads(line)
                     except json.JSONDecodeError:  # a line cut by an interrupted run
                         continue
-                    done[d["unit"]] = d
+                    if ((every is None or d.get("every") == every)
+                            and (switch is None or d.get("switch") == switch)):
+                        done[d["unit"]] = d
     return done
 
 
@@ -326,8 +340,7 @@ def run(set_name: str, variants: Sequence[Variant], out: str | Path, every: int 
     paths = {v.name: result_path(out, set_name, v.name) for v in variants}
     for p in paths.values():
         p.parent.mkdir(parents=True, exist_ok=True)
-    done = {name: {k for k, d in read_results(p).items() if d.get("every") == every}
-            for name, p in paths.items()}
+    done = {v.name: set(read_results(paths[v.name], every, v.switch)) for v in variants}
     todo = [(u, [v for v in variants if u.key not in done[v.name]]) for u in laps]
     todo = [(u, vs) for u, vs in todo if vs]
     commit = _commit()
@@ -522,14 +535,15 @@ def _ci(t, digits: int = 2) -> str:
 
 
 def analyse(out: str | Path, set_name: str, variants: Sequence[Variant],
-            resamples: int = RESAMPLES, seed: int = 0) -> dict[str, dict]:
-    """``compare`` of every variant with results against the baseline on ``set_name``."""
-    base = read_results(result_path(out, set_name, BASELINE.name))
+            resamples: int = RESAMPLES, seed: int = 0, every: int = 4) -> dict[str, dict]:
+    """``compare`` of every variant with results (at ``every``) against the baseline on
+    ``set_name``."""
+    base = read_results(result_path(out, set_name, BASELINE.name), every, BASELINE.switch)
     res = {}
     for v in variants:
         if v.name == BASELINE.name:
             continue
-        var = read_results(result_path(out, set_name, v.name))
+        var = read_results(result_path(out, set_name, v.name), every, v.switch)
         if base and var:
             res[v.name] = compare(base, var, resamples, seed)
     return res
@@ -658,6 +672,11 @@ def main(argv: Sequence[str] | None = None) -> None:
                     help="Comma-separated variant names (default: all); the baseline always "
                          "runs. --list shows them.")
     ap.add_argument("--list", action="store_true", help="List the variants and exit.")
+    ap.add_argument("--combine", default=None, metavar="NAMES",
+                    help="Comma-separated variant names: also run (and compare) one variant "
+                         "with all their switches at once, named by --combine-name.")
+    ap.add_argument("--combine-name", default="combined",
+                    help="The combined variant's name and file (default: combined).")
     ap.add_argument("--out", default="ablation_out",
                     help="Results folder: OUT/SET/VARIANT.jsonl (default: ablation_out).")
     ap.add_argument("--every", type=int, default=4, help="Every n-th pose (default: 4).")
@@ -695,6 +714,15 @@ def main(argv: Sequence[str] | None = None) -> None:
                                     [x.strip() for x in args.variants.split(",") if x.strip()])
     except ValueError as exc:
         ap.error(str(exc))
+    if args.combine:
+        try:
+            members = variants_by_name([x.strip() for x in args.combine.split(",")
+                                        if x.strip()])
+        except ValueError as exc:
+            ap.error(str(exc))
+        if args.combine_name in {v.name for v in [BASELINE, *VARIANTS]}:
+            ap.error("--combine-name: that is the name of a variant")
+        variants.append(combined(members[1:], args.combine_name))
     fp_rates = _floats(args.fp_rates)
     if not args.no_run:
         for s in sets:
@@ -702,7 +730,7 @@ def main(argv: Sequence[str] | None = None) -> None:
                 fp_rates=fp_rates, dataset=args.dataset,
                 shared=None if args.tracks is None else [int(x) for x in args.tracks.split(",")],
                 n_generated=args.generated)
-    results = {s: analyse(args.out, s, variants, args.resamples, args.boot_seed)
+    results = {s: analyse(args.out, s, variants, args.resamples, args.boot_seed, args.every)
                for s in ("choosing", "reporting")
                if result_path(args.out, s, BASELINE.name).exists()}
     parts = [f"Every {args.every}th pose; differences are variant minus baseline (without - "

@@ -164,3 +164,15 @@ def test_compare_gives_no_verdict_on_one_lap_a_cell():
     r = B.compare(base, var, resamples=50)
     assert r["geo_1m"] == pytest.approx((20.0, 20.0, 20.0))  # a point: one lap, always drawn
     assert r["verdict"] == "too few laps"
+
+
+def test_combined_variant_has_every_switch():
+    a = next(v for v in B.VARIANTS if v.name == "no_unhook")
+    b = next(v for v in B.VARIANTS if v.name == "no_turn_roughness")
+    c = B.combined([a, b], "both")
+    assert c.constants == a.constants and c.params == b.params
+    with B.switched(c) as params:
+        import clc.solver
+
+        assert clc.solver.UNHOOK is False and params.w_turn_roughness == 0.0
+    assert clc.solver.UNHOOK is True
