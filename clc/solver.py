@@ -83,6 +83,9 @@ DIVE_REACH_M = 25.0
 #: Rounds of dives: a dive whose lane wins has its own close calls revisited. Chosen by
 #: measurement: docs/tuning.md#dive_rounds.
 DIVE_ROUNDS = 3
+#: The close-call dives (``contested_dives`` at ``LaneParams.contested_margin``); False turns
+#: them off alone, keeping the rest of the dive rounds (for benchmarks/bench_ablation.py).
+CONTESTED_DIVES = True
 #: Jog dives (``jog_positions``): a width jog of the winner within the dive reach, where the second
 #: difference of its matching-line lengths exceeds this (metres), is revisited like a close
 #: call. Chosen by measurement: docs/tuning.md#jog_threshold_m.
@@ -394,7 +397,8 @@ class ClcModel:
             dives = []
             if search:
                 dives = contested_dives(points, pose, p, res.graph, res.start, left, right,
-                                        p.contested_margin, DIVE_REACH_M, budget, skip=done,
+                                        p.contested_margin if CONTESTED_DIVES else -np.inf,
+                                        DIVE_REACH_M, budget, skip=done,
                                         deadline=deadline, stopped=stopped)
             if search and SHORT_LANE_M > 0 and _short(points, pose, left, right, SHORT_LANE_M,
                                                       beyond):
