@@ -535,13 +535,15 @@ def _ci(t, digits: int = 2) -> str:
 
 
 def analyse(out: str | Path, set_name: str, variants: Sequence[Variant],
-            resamples: int = RESAMPLES, seed: int = 0, every: int = 4) -> dict[str, dict]:
+            resamples: int = RESAMPLES, seed: int = 0, every: int = 4,
+            reference: str = BASELINE.name) -> dict[str, dict]:
     """``compare`` of every variant with results (at ``every``) against the baseline on
-    ``set_name``."""
-    base = read_results(result_path(out, set_name, BASELINE.name), every, BASELINE.switch)
+    ``set_name``, or against the variant named ``reference`` (its file as written)."""
+    base = read_results(result_path(out, set_name, reference), every,
+                        BASELINE.switch if reference == BASELINE.name else None)
     res = {}
     for v in variants:
-        if v.name == BASELINE.name:
+        if v.name in (BASELINE.name, reference):
             continue
         var = read_results(result_path(out, set_name, v.name), every, v.switch)
         if base and var:
@@ -644,11 +646,12 @@ def track_markdown(results: dict[str, dict], variants: Sequence[Variant]) -> str
     return "\n".join(lines)
 
 
-def baseline_line(results: dict[str, dict], set_name: str) -> str:
+def baseline_line(results: dict[str, dict], set_name: str,
+                  reference: str = BASELINE.name) -> str:
     r = next((x for x in results.values() if x.get("laps")), None)
     if r is None:
         return f"{set_name}: no results"
-    return (f"{set_name}: {r['laps']} laps, {r['poses']} poses; baseline geometric critical "
+    return (f"{set_name}: {r['laps']} laps, {r['poses']} poses; {reference} geometric critical "
             f"{r['base_geo_1m']:.2f} % (1 m) and {r['base_geo_0.5m']:.2f} % (0.5 m), length "
             f"ratio {r['base_length']:.1f} %, median latency {r['base_latency_ms']:.2f} ms")
 
@@ -691,6 +694,9 @@ def main(argv: Sequence[str] | None = None) -> None:
                     help="Only the first N tracks of the generated set (default: all 32).")
     ap.add_argument("--processes", type=int, default=1,
                     help="Processes; only 1 is supported (the laps of a shared machine).")
+    ap.add_argument("--against", default=BASELINE.name, metavar="NAME",
+                    help="Compare with the results of this variant (OUT/SET/NAME.jsonl) "
+                         "instead of the baseline's, e.g. a --combine-name (default: baseline).")
     ap.add_argument("--no-run", action="store_true",
                     help="Only analyse the results already in OUT.")
     ap.add_argument("--resamples", type=int, default=RESAMPLES,
@@ -730,13 +736,13 @@ def main(argv: Sequence[str] | None = None) -> None:
                 fp_rates=fp_rates, dataset=args.dataset,
                 shared=None if args.tracks is None else [int(x) for x in args.tracks.split(",")],
                 n_generated=args.generated)
-    results = {s: analyse(args.out, s, variants, args.resamples, args.boot_seed, args.every)
-               for s in ("choosing", "reporting")
-               if result_path(args.out, s, BASELINE.name).exists()}
-    parts = [f"Every {args.every}th pose; differences are variant minus baseline (without - "
+    ref = args.against
+    results = {s: analyse(args.out, s, variants, args.resamples, args.boot_seed, args.every, ref)
+               for s in ("choosing", "reporting") if result_path(args.out, s, ref).exists()}
+    parts = [f"Every {args.every}th pose; differences are variant minus {ref} (without - "
              "with), % points (latency: ms), 95 % paired bootstrap intervals over laps.",
-             *(baseline_line(results[s], s) + f"; commits {sorted(commits(args.out, s, variants))}"
-               for s in results),
+             *(baseline_line(results[s], s, ref)
+               + f"; commits {sorted(commits(args.out, s, variants))}" for s in results),
              "", markdown(results, variants)]
     for s in results:
         parts += ["", f"Per false-positive rate, {s}:", "",
