@@ -12,8 +12,10 @@ variants on one simulated lap, pose by pose, see ``run_lap``), on one of two set
 - ``reporting``: the shared tracks with seeds 5-9, plus ``generated_set("reporting")`` (seed 5);
 
 at ranges 30 and 50 m and false-positive rates 0, 10, 30 and 50 %, every ``--every``-th pose.
-A variant is switched through ``LaneParams`` fields or through module constants of ``clc``
-(set in this process for its laps, then restored); nothing in the package changes.
+A variant is switched through ``LaneParams`` fields or through the fields of CLC's refinement
+stage (``clc.refine.Refinement``, given to the model's constructor); nothing in the package
+changes. The additions the ablation removed (docs/ablation.md) are no longer variants: the table
+there reran at commit 0cfe2c5.
 
 Results: one JSON-lines file per set and variant (``OUT/SET/VARIANT.jsonl``), a line per lap
 with its per-pose records (the geometric deviation, predicted and true lane length, latency).
@@ -37,14 +39,12 @@ zero; decided on ``choosing``, confirmed on ``reporting``.
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import math
 import subprocess
 import sys
 import time
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -60,26 +60,24 @@ GEO_M = (1.0, 0.5)
 
 @dataclass(frozen=True)
 class Variant:
-    """One arm of the ablation: ``params`` (``LaneParams`` fields) and ``constants``
-    (``"module.NAME"``: value) switch one addition off; empty for the baseline."""
+    """One arm of the ablation: ``params`` (``LaneParams`` fields) and ``refine``
+    (``clc.refine.Refinement`` fields) switch one addition off; empty for the baseline."""
 
     name: str
     addition: str
     params: dict = field(default_factory=dict)
-    constants: dict = field(default_factory=dict)
+    refine: dict = field(default_factory=dict)
     tuning: str = ""  # its docs/tuning.md anchor
 
     @property
     def switch(self) -> str:
-        parts = [f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
-                 for k, v in self.params.items()]
-        parts += [f"{k.rsplit('.', 1)[1]}={v}" for k, v in self.constants.items()]
+        items = {**self.params, **{f"Refinement.{k}": v for k, v in self.refine.items()}}
+        parts = [f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in items.items()]
         return ", ".join(parts) or "(defaults)"
 
 
 BASELINE = Variant("baseline", "today's CLC, every addition on")
 
-_S = "clc.solver."
 #: The variants, one addition switched off in each (docs/clc.md, "Additions beyond the paper").
 VARIANTS: tuple[Variant, ...] = (
     Variant("no_nvd_distance", "next-vertex decider: distance term",
@@ -87,50 +85,26 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("no_nvd_lookahead", "next-vertex decider: look-ahead",
             {"nvd_lookahead_weight": 0.0}, tuning="nvd_lookahead_weight"),
     Variant("no_contested_dives", "contested (close-call) dives",
-            constants={_S + "CONTESTED_DIVES": False}, tuning="contested_margin"),
-    Variant("no_skipped_cone_dives", "skipped-cone dives",
-            {"skipped_cone_m": 0.0}, tuning="skipped_cone_m"),
-    Variant("no_jog_dives", "jog dives", constants={_S + "JOG_DIVES": 0},
-            tuning="jog_dives"),
-    Variant("no_short_lane_dives", "short-lane dives", constants={_S + "SHORT_LANE_M": 0.0},
+            refine={"contested": False}, tuning="contested_margin"),
+    Variant("no_jog_dives", "jog dives", refine={"jog_dives": 0}, tuning="jog_dives"),
+    Variant("no_short_lane_dives", "short-lane dives", refine={"short_lane_m": 0.0},
             tuning="short_lane_m"),
     Variant("one_dive_round", "dive rounds (3; one round without them)",
-            constants={_S + "DIVE_ROUNDS": 1}, tuning="dive_rounds"),
-    Variant("no_dive_stage", "dive judge with everything it judges (dives, local edits, "
-            "outward drops)", {"contested_margin": 0.0}, tuning="contested_margin"),
+            refine={"rounds": 1}, tuning="dive_rounds"),
+    Variant("no_dive_stage", "dive judge with everything it judges (dives, pair drops)",
+            {"contested_margin": 0.0}, tuning="contested_margin"),
     Variant("no_width_roughness", "dive judge: width roughness",
             {"w_width_roughness": 0.0}, tuning="w_width_roughness"),
-    Variant("no_turn_roughness", "dive judge: turn roughness",
-            {"w_turn_roughness": 0.0}, tuning="w_turn_roughness"),
-    Variant("no_pair_drops", "pair drops", constants={_S + "PAIR_DROPS": False},
-            tuning="pair_drops"),
-    Variant("no_skip_inserts", "skip inserts", constants={_S + "SKIP_INSERTS": False},
-            tuning="skip_inserts"),
-    Variant("no_start_replacements", "start replacements",
-            constants={_S + "START_REPLACE_M": 0.0}, tuning="start_replace_m"),
-    Variant("no_judge_complete", "judging a complete enumeration's pick",
-            constants={_S + "JUDGE_COMPLETE": False}, tuning="judge_complete"),
-    Variant("no_outward_drops", "outward drops", constants={_S + "OUTWARD_DROP_PASSES": 0},
-            tuning="outward_drop_passes"),
-    Variant("no_ring_join", "ring-join drop", constants={_S + "RING_JOIN": False},
-            tuning="ring_join"),
-    Variant("no_trim_behind", "trim-behind", constants={_S + "TRIM_BEHIND": False},
+    Variant("no_pair_drops", "pair drops", refine={"pair_drops": False}, tuning="pair_drops"),
+    Variant("no_ring_join", "ring-join drop", refine={"ring_join": False}, tuning="ring_join"),
+    Variant("no_trim_behind", "trim-behind", refine={"trim_behind": False},
             tuning="trim_behind"),
-    Variant("no_unhook", "unhook", constants={_S + "UNHOOK": False}, tuning="unhook"),
-    Variant("no_trapped_rerun", "trapped-search rerun",
-            constants={_S + "TRAPPED_CANDIDATES": 0}, tuning="trapped_candidates"),
     Variant("no_start_lookback", "start look-back", {"start_lookback_m": 0.0},
             tuning="start_lookback_m"),
     Variant("no_narrow_last", "narrow start pairs last", {"start_min_width_m": 0.0},
             tuning="start_min_width_m"),
-    # start_behind_m must be finite; no start cone lies 1e6 m behind the car (paper's order).
-    Variant("no_behind_later", "start pairs far behind the car later",
-            {"start_behind_m": 1e6}, tuning="start_behind_m"),
     Variant("no_runner_up_starts", "runner-up start pairs", {"start_pairs": 1},
             tuning="start_pairs"),
-    Variant("no_min_start_depth", "runner-ups also for a shallow lane (MIN_START_DEPTH 5; "
-            "1: only when the best pair has no lane)", constants={_S + "MIN_START_DEPTH": 1},
-            tuning="min_start_depth"),
     Variant("it_max_2500", "it_max 250 (the paper's 2500 instead)",
             {"max_iterations": 2500}, tuning="max_iterations"),
 )
@@ -143,11 +117,11 @@ SETS = {"choosing": ((0, 1, 2, 3, 4), "choosing", 0),
 def combined(variants: Sequence[Variant], name: str = "combined") -> Variant:
     """One variant with every switch of ``variants`` at once (a check that additions judged
     one at a time do not matter together)."""
-    params, constants = {}, {}
+    params, refine = {}, {}
     for v in variants:
         params.update(v.params)
-        constants.update(v.constants)
-    return Variant(name, "together: " + ", ".join(v.name for v in variants), params, constants)
+        refine.update(v.refine)
+    return Variant(name, "together: " + ", ".join(v.name for v in variants), params, refine)
 
 
 def variants_by_name(names: Sequence[str] | None = None) -> list[Variant]:
@@ -161,25 +135,12 @@ def variants_by_name(names: Sequence[str] | None = None) -> list[Variant]:
     return [BASELINE] + [known[n] for n in names if n != BASELINE.name]
 
 
-@contextmanager
-def switched(variant: Variant) -> Iterator:
-    """The ``LaneParams`` of ``variant``, its module constants set for the duration."""
+def configured(variant: Variant) -> tuple:
+    """The ``LaneParams`` and the ``clc.refine.Refinement`` of ``variant``."""
+    from clc.refine import Refinement
     from rld.types import LaneParams
 
-    params = replace(LaneParams(), **variant.params)
-    old = []
-    try:
-        for key, value in variant.constants.items():
-            mod_name, attr = key.rsplit(".", 1)
-            mod = importlib.import_module(mod_name)
-            if not hasattr(mod, attr):
-                raise AttributeError(f"{mod_name} has no constant {attr}")
-            old.append((mod, attr, getattr(mod, attr)))
-            setattr(mod, attr, value)
-        yield params
-    finally:
-        for mod, attr, value in reversed(old):
-            setattr(mod, attr, value)
+    return replace(LaneParams(), **variant.params), Refinement(**variant.refine)
 
 
 # ----------------------------------------------------------------------------- the laps
@@ -259,8 +220,8 @@ def run_lap(variants: Sequence[Variant], track, unit: Unit, every: int) -> dict[
     lap = simulate_lap(track, range_m=unit.range_m, fp_rate=unit.fp_rate, seed=unit.seed)
     solvers = {}
     for v in variants:
-        with switched(v) as params:
-            solvers[v.name] = LaneSolver(method="clc", params=params)
+        params, refine = configured(v)
+        solvers[v.name] = LaneSolver(method="clc", params=params, options={"refine": refine})
     out: dict[str, list] = {v.name: [] for v in variants}
     rng = np.random.default_rng(_key_seed(unit.key))
     for k in range(0, len(lap), every):
@@ -268,11 +229,10 @@ def run_lap(variants: Sequence[Variant], track, unit: Unit, every: int) -> dict[
         scores: dict[tuple, object] = {}
         for i in rng.permutation(len(variants)):
             v = variants[int(i)]
-            with switched(v):
-                t0 = time.perf_counter()
-                lane = solvers[v.name].solve(frame.cones, frame.pose, time_limit_s=None,
-                                             colors=frame.colors)
-                latency = time.perf_counter() - t0
+            t0 = time.perf_counter()
+            lane = solvers[v.name].solve(frame.cones, frame.pose, time_limit_s=None,
+                                         colors=frame.colors)
+            latency = time.perf_counter() - t0
             key = (lane.ok, lane.closed, lane.left.tobytes(), lane.right.tobytes())
             if key not in scores:
                 scores[key] = score_lane(frame, lane.left, lane.right, lane.ok, lane.closed)

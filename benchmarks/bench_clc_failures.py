@@ -6,8 +6,8 @@ lane *from the lane's own start* (``truth_from_start``):
 
 - ``truth_infeasible``: the true lane fails the shared lane predicate (``lane_is_feasible``:
   spacing, C_seg, C_width, C_poly). No search can return it; only the constraints can change.
-- ``judge_prefers_wrong``: the true lane is feasible, and the dive judge (``clc.solver
-  .dive_cost``: RLD's objective within ``DIVE_REACH_M`` of the car plus the roughness terms)
+- ``judge_prefers_wrong``: the true lane is feasible, and the dive judge (``clc.refine
+  .dive_cost``: RLD's objective within ``Refinement.reach_m`` of the car plus the roughness)
   scores it no better than the lane returned. A search that found the truth would not pick it.
   Both lanes are costed as open sequences from their first cones (a closed truth, a ring, from
   the cone the comparison starts at): the judge costs a closed lane whole, and a closed truth
@@ -104,7 +104,7 @@ def classify(frame: Frame, left: np.ndarray, right: np.ndarray,
     """The class of the lane ``left``, ``right`` (frame indices) against ``frame``'s truth,
     and the judge's cost gap (truth minus lane, both open from their first cones; nan when the
     truth is infeasible)."""
-    from clc.solver import dive_cost
+    from clc.refine import dive_cost
 
     tl, tr = truth_from_start(frame, left, right)
     if len(tl) < 2 or len(tr) < 2 or not lane_is_feasible(frame.cones[tl], frame.cones[tr],

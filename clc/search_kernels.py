@@ -15,7 +15,6 @@ from rld.geometry_kernels import (
     grow_int,
     grow_rows,
     point_segment_distance,
-    point_segment_param,
     ring_edges_touch,
     segment_distance,
     turn_angle,
@@ -252,72 +251,6 @@ def contested_positions(pts, adj_ptr, adj_idx, path, other, hx, hy, max_turn, di
             out[m] = j
             m += 1
     return out[:m]
-
-
-@njit(cache=True)
-def skipped_positions(pts, adj_ptr, adj_idx, path, other, tol, reach):
-    """Positions j >= 1 of ``path`` (one boundary of a lane, ``other`` the other one) within
-    ``reach`` metres of path length from its start where the edge path[j-1] -> path[j] passes
-    a skipped cone: a search-graph neighbour of path[j-1], in neither boundary, whose closest
-    point on that edge is inside it (not an end) and at most ``tol`` metres away. Returns the
-    positions in order (``skipped_cones`` also gives the cone to take in at each)."""
-    return skipped_cones(pts, adj_ptr, adj_idx, path, other, tol, reach)[0]
-
-
-@njit(cache=True)
-def _used_mask(n, path, other):
-    """(n,) bool: the cones of ``path`` and of ``other`` (the two boundaries of a lane)."""
-    used = np.zeros(n, dtype=np.bool_)
-    for v in path:
-        used[v] = True
-    for v in other:
-        used[v] = True
-    return used
-
-
-@njit(cache=True)
-def _adjacent(adj_ptr, adj_idx, a, b):
-    """Whether the search graph joins ``a`` and ``b`` (``a``'s neighbours are sorted)."""
-    lo, hi = adj_ptr[a], adj_ptr[a + 1]
-    k = lo + np.searchsorted(adj_idx[lo:hi], b)
-    return k < hi and adj_idx[k] == b
-
-
-@njit(cache=True)
-def skipped_cones(pts, adj_ptr, adj_idx, path, other, tol, reach):
-    """``skipped_positions`` and, at each position j, the skipped cone nearest the edge
-    path[j-1] -> path[j] that is also a search-graph neighbour of path[j] (so a boundary can
-    take it in between the two; ``clc.search.skip_inserts``), or -1 when none is. Returns the
-    two arrays, positions and cones."""
-    used = _used_mask(pts.shape[0], path, other)
-    out = np.empty(path.shape[0], dtype=np.int64)
-    cones = np.empty(path.shape[0], dtype=np.int64)
-    m = 0
-    arc = 0.0
-    for j in range(1, path.shape[0]):
-        a = path[j - 1]
-        b = path[j]
-        arc += math.hypot(pts[b, 0] - pts[a, 0], pts[b, 1] - pts[a, 1])
-        if arc > reach:
-            break
-        found = False
-        best, best_d = -1, np.inf
-        for s in range(adj_ptr[a], adj_ptr[a + 1]):
-            v = adj_idx[s]
-            if used[v]:
-                continue
-            d, t = point_segment_param(pts[v, 0], pts[v, 1], pts[a, 0], pts[a, 1],
-                                       pts[b, 0], pts[b, 1])
-            if not (0.0 < t < 1.0 and d <= tol):
-                continue
-            found = True
-            if d < best_d and _adjacent(adj_ptr, adj_idx, v, b):
-                best, best_d = v, d
-        if found:
-            out[m] = j
-            cones[m] = best
-            m += 1
-    return out[:m], cones[:m]
 
 
 @njit(cache=True)
@@ -733,7 +666,7 @@ def _grow_side(pts, P, nP, v, k, Q, nQ, triedP, triedQ, f, g, in_path, Pbox, Pmi
 @njit(cache=True)
 def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, wmin, wmax,
                     dist_weight, lookahead, max_iterations, guide_l, guide_r, banned,
-                    forbid_l=-1, forbid_r=-1, dead_end=-1.0, stale=0, memo=True, pen_l=None,
+                    forbid_l=-1, forbid_r=-1, dead_end=-1.0, memo=True, pen_l=None,
                     pen_r=None):
     """CLC Alg. 2: enumerate the path pairs from (start_l, start_r) that satisfy CD (eq. 6),
     each boundary's first edge within ``max_turn`` of the heading (ours).
@@ -790,8 +723,6 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     scoreL = np.empty((D, maxdeg))
     scoreR = np.empty((D, maxdeg))
     scored = np.zeros(D, dtype=np.bool_)
-    # The depth of the deepest feasible frame on the current path (the start frame counts).
-    last_ok = np.zeros(D, dtype=np.int64)
     # Width values per frame (row) and path position (column). They start small and grow
     # (``grow_2d``) as the search goes deeper or the paths longer: a full (N + 1, N) block
     # per side was megabytes on a map of 400 cones, freshly paged in by every call (on one
@@ -838,8 +769,6 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
     wvR[0, 0] = d0
     iterations = 0
     complete = True
-    gave_up = False  # a subtree abandoned (``stale``): the enumeration is not complete
-    unwind = D  # frames deeper than this are abandoned (D: none)
     if d0 < wmin or (pts[start_l, 0] == pts[start_r, 0] and pts[start_l, 1] == pts[start_r, 1]):
         # The start pair is already narrower than the lane can be: no extension can help, and
         # a zero-length back edge makes every ring non-simple.
@@ -850,24 +779,20 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
             complete = False
             break
         f = depth
-        if depth > unwind:  # a frame the give-up rule abandoned (below)
-            kl, vl, kr, vr = -1, -1, -1, -1
-        else:
-            unwind = D
-            if not scored[f] or not memo:
-                _score_options(pts, adj_ptr, adj_idx, L, nL, triedL[f], in_path, max_turn, hx,
-                               hy, dist_weight, lookahead, dead_end, guide_l, on_gl[nL - 1],
-                               forbid_l, scoreL[f], penL)
-                _score_options(pts, adj_ptr, adj_idx, R, nR, triedR[f], in_path, max_turn, hx,
-                               hy, dist_weight, lookahead, dead_end, guide_r, on_gr[nR - 1],
-                               forbid_r, scoreR[f], penR)
-                scored[f] = True
-            kl, vl = _pick_option(adj_ptr, adj_idx, L[nL - 1], nL, triedL[f], scoreL[f],
-                                  guide_l, on_gl[nL - 1])
-            kr, vr = _pick_option(adj_ptr, adj_idx, R[nR - 1], nR, triedR[f], scoreR[f],
-                                  guide_r, on_gr[nR - 1])
+        if not scored[f] or not memo:
+            _score_options(pts, adj_ptr, adj_idx, L, nL, triedL[f], in_path, max_turn, hx, hy,
+                           dist_weight, lookahead, dead_end, guide_l, on_gl[nL - 1], forbid_l,
+                           scoreL[f], penL)
+            _score_options(pts, adj_ptr, adj_idx, R, nR, triedR[f], in_path, max_turn, hx, hy,
+                           dist_weight, lookahead, dead_end, guide_r, on_gr[nR - 1], forbid_r,
+                           scoreR[f], penR)
+            scored[f] = True
+        kl, vl = _pick_option(adj_ptr, adj_idx, L[nL - 1], nL, triedL[f], scoreL[f], guide_l,
+                              on_gl[nL - 1])
+        kr, vr = _pick_option(adj_ptr, adj_idx, R[nR - 1], nR, triedR[f], scoreR[f], guide_r,
+                              on_gr[nR - 1])
         if kl < 0 and kr < 0:
-            # Frame exhausted (or abandoned): undo the extension that made it.
+            # Frame exhausted: undo the extension that made it.
             if depth == 0:
                 break
             s = made_by[depth]
@@ -977,15 +902,7 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
         if not backtrack and longR:
             backtrack = not _has_option(pts, adj_ptr, adj_idx, L, nL, triedL[g], in_path,
                                         max_turn)
-        last_ok[g] = g if feasible else last_ok[f]
-        # Under a limit only (the enumeration stays complete without one): a pair left
-        # infeasible by ``stale`` extensions in a row (a width above w_max that the other
-        # boundary does not mend: it wanders on through the map, an exponential subtree of
-        # infeasible pairs) abandons the subtree of the extension after its last feasible
-        # frame F: that frame's next option comes next.
-        give_up = (not backtrack and stale > 0 and max_iterations > 0
-                   and g - last_ok[g] >= stale)
-        if backtrack or give_up:
+        if backtrack:
             if side == 0:
                 nL -= 1
                 in_path[L[nL]] = False
@@ -995,73 +912,4 @@ def enumerate_pairs(pts, adj_ptr, adj_idx, start_l, start_r, hx, hy, max_turn, w
         else:
             depth = g
             scored[g] = False  # a new frame at this depth
-        if give_up:
-            gave_up = True
-            unwind = last_ok[g]  # the frames above it are undone as exhausted ones
-    return (lf[: lp[K]], lp[: K + 1], rf[: rp[K]], rp[: K + 1], feats[:K], iterations,
-            complete and not gave_up)
-
-
-@njit(cache=True)
-def start_replacement_cones(pts, adj_ptr, adj_idx, path, other, left_side, px, py, hx, hy,
-                            inside_m, pair_m):
-    """The cones that may replace ``path[0]`` (``clc.search.start_replacements``, which
-    documents the rule), in the order of ``path[1]``'s sorted neighbours: unused, on the
-    boundary's side of the car (y in the car frame > 0 for the left one, as ``Pose.to_local``
-    computes it), the foot on the edge path[0] -> path[1] inside it (the unclamped
-    ``geometry.segment_parameter`` in (0, 1)), on the lane's side of it, at most ``inside_m``
-    from it and more than ``pair_m`` from path[1]."""
-    out = np.empty(0, dtype=np.int64)
-    if path.shape[0] < 2:
-        return out
-    used = _used_mask(pts.shape[0], path, other)
-    a = path[0]
-    b = path[1]
-    ax, ay, bx, by = pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1]
-    abx, aby = bx - ax, by - ay
-    den = max(abx * abx + aby * aby, 1e-18)
-    keep = np.empty(adj_ptr[b + 1] - adj_ptr[b], dtype=np.int64)
-    m = 0
-    for s in range(adj_ptr[b], adj_ptr[b + 1]):
-        v = adj_idx[s]
-        if used[v]:
-            continue
-        qx, qy = pts[v, 0], pts[v, 1]
-        y = -hy * (qx - px) + hx * (qy - py)
-        if (y > 0) != left_side:
-            continue
-        t = ((qx - ax) * abx + (qy - ay) * aby) / den
-        if not (0.0 < t < 1.0):
-            continue
-        cross = abx * (qy - ay) - aby * (qx - ax)
-        if not ((cross < 0) if left_side else (cross > 0)):
-            continue
-        if point_segment_distance(qx, qy, ax, ay, bx, by) > inside_m:
-            continue
-        if math.hypot(qx - bx, qy - by) <= pair_m:
-            continue
-        keep[m] = v
-        m += 1
-    return keep[:m]
-
-
-@njit(cache=True)
-def outward_positions(pts, adj_ptr, adj_idx, path, head, sign, orient):
-    """The interior positions k (1 <= k < min(head, len(path) - 1)) of ``path`` whose cone
-    bends the boundary away from the lane (``clc.search.outward_drops``): the turn at it
-    (``turn_angle``) times ``sign`` (+1 for the left boundary, -1 for the right one) has the
-    sign ``orient`` of the lane ring's area, and a search-graph edge joins path[k - 1] and
-    path[k + 1]."""
-    hi = min(head, path.shape[0] - 1)
-    out = np.empty(max(hi - 1, 0), dtype=np.int64)
-    m = 0
-    for k in range(1, hi):
-        a, b, c = path[k - 1], path[k], path[k + 1]
-        t = turn_angle(pts[a, 0], pts[a, 1], pts[b, 0], pts[b, 1], pts[c, 0], pts[c, 1])
-        st = 1.0 if t > 0 else (-1.0 if t < 0 else 0.0)
-        if st * sign != orient:
-            continue
-        if _adjacent(adj_ptr, adj_idx, a, c):
-            out[m] = k
-            m += 1
-    return out[:m]
+    return lf[: lp[K]], lp[: K + 1], rf[: rp[K]], rp[: K + 1], feats[:K], iterations, complete

@@ -1018,35 +1018,6 @@ def bench_fp_clearance(clearances: str, methods: str, cells: str, seeds: list[in
         click.echo(f"wrote {plot_path}")
 
 
-@bench.command("clc-judge")
-@click.option("--source", type=click.Choice(["shared", "generated"]), default="shared",
-              show_default=True, help="The dataset tracks, or generated ones.")
-@click.option("--tracks", default=None, type=_TRACK_IDS,
-              show_default="all the shared tracks; generated: required",
-              help="Comma-separated track ids (shared: dataset track numbers; generated: their "
-                   "seeds, integers >= 0).")
-@click.option("--cells", default="30:0.1,30:0.3,50:0.3", show_default=True, help=_CELLS_HELP)
-@click.option("--seed", "seeds", default="5", show_default=True, type=_SEEDS, help=_SEEDS_HELP)
-@click.option("--every", default=1, show_default=True, type=_COUNT, help=_EVERY_HELP)
-@click.option("--fit", "fit_weights", is_flag=True,
-              help="Also fit the judge's weights (leave one track out, and on all); off by "
-                   "default.")
-@click.option("--processes", default=2, show_default=True, type=_COUNT, help=_PROCESSES_HELP)
-@click.option("--out", default=None, metavar="FILE", callback=_out_file, show_default="none",
-              help="Also write the Markdown table to this file.")
-def bench_clc_judge(source: str, tracks: list[int] | None, cells: str, seeds: list[int],
-                    every: int, fit_weights: bool, processes: int, out: str | None) -> None:
-    """How often CLC's dive judge picks a right lane when it has one, and what weights fitted
-    to its decisions would do (benchmarks/bench_clc_judge.py)."""
-    mod = _benchmark_module("bench_clc_judge")
-    parsed = _parse_cells(cells)
-    try:
-        result = mod.run(source, tracks or None, parsed, seeds, every, fit_weights, processes)
-    except (FileNotFoundError, ValueError) as exc:
-        raise UserError(str(exc)) from exc
-    _emit(mod.to_markdown(result), out)
-
-
 @bench.command("generator")
 @click.option("--sets", default="choosing,reporting", show_default=True,
               help="Comma-separated generated sets (rld.generator.generated_set): choosing, "

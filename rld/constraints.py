@@ -46,7 +46,6 @@ __all__ = [
     "overlap_widths",
     "c_width",
     "lane_is_feasible",
-    "hook_position",
     "find_starting_vertices",
     "starting_vertex_pairs",
 ]
@@ -358,56 +357,15 @@ def lane_is_feasible(left: np.ndarray, right: np.ndarray, params, closed: bool =
     )
 
 
-#: ``hook_position``: the turn (radians) at least with which a boundary must reach a cone that
-#: the other boundary's end reaches more smoothly; above every true lane's, below CLC's clear
-#: hooks. Chosen by measurement: docs/tuning.md#hook_min_turn_rad.
-HOOK_MIN_TURN_RAD = 0.9
-#: ``hook_position``: by how much (radians) that turn must exceed the other end's turn to the
-#: cone. Chosen by measurement: docs/tuning.md#hook_margin_rad.
-HOOK_MARGIN_RAD = 0.7
-
-
-def hook_position(own: np.ndarray, other: np.ndarray, max_spacing_m: float,
-                  min_turn_rad: float = HOOK_MIN_TURN_RAD,
-                  margin_rad: float = HOOK_MARGIN_RAD) -> int:
-    """Where boundary ``own`` hooks onto the other one's end, or -1.
-
-    ``own`` and ``other`` are (k, 2) boundaries, metres, ordered from the car. A boundary hooks
-    at position j (>= 2) when its cone j continues ``other`` better than ``own``: it lies within
-    ``max_spacing_m`` of ``other``'s last cone, ``own`` turns by at least ``min_turn_rad`` to
-    reach it, and ``other``'s last edge would reach it with a turn at least ``margin_rad``
-    smaller. On a straight, a right boundary that ends by crossing the lane to the cone that
-    comes next on the left side hooks there (a 90 degree turn against 0). Such a lane passes
-    C_seg, C_width and C_poly (eq. 6 of CLC, the shared predicates): the turn is within
-    phi_max, the hooked cone is one cone spacing from the other boundary's last cone (within
-    the width limits), and the polygon stays simple, but it closes the lane's far end with an
-    edge across it. Our addition; neither paper has it (docs/clc.md, "Hooks undone").
-    Returns the first such j."""
-    own = np.asarray(own, dtype=np.float64)
-    other = np.asarray(other, dtype=np.float64)
-    if own.shape[0] < 3 or other.shape[0] < 2:
-        return -1
-    d = own[2:] - other[-1]
-    # Few cones lie within reach of the other end (one or two): their turns one by one.
-    for j in np.flatnonzero(d[:, 0] ** 2 + d[:, 1] ** 2 <= max_spacing_m ** 2) + 2:
-        t_own = abs(gk.turn_angle(*own[j - 2], *own[j - 1], *own[j]))
-        if t_own >= min_turn_rad and (abs(gk.turn_angle(*other[-2], *other[-1], *own[j]))
-                                      + margin_rad <= t_own):
-            return int(j)
-    return -1
-
-
 def starting_vertex_pairs(
     points: np.ndarray, pose: Pose, radius_m: float, k: int = 1, min_width_m: float = 0.0,
-    max_behind_m: float = math.inf, reach_m: float = 0.0,
+    reach_m: float = 0.0,
 ) -> list[tuple[int, int]]:
     """The ``k`` best (left, right) start pairs of CLC's ``find_starting_vertices`` (IV-C),
     best first (see there); fewer when fewer pairs exist, none when a side has no candidate.
     Pairs whose two cones are less than ``min_width_m`` apart (metres) come after every wider
     pair, in the same order among themselves (our addition, ``LaneParams.start_min_width_m``;
-    0, the default, is the paper's order). Within each of those two groups, pairs with a cone
-    more than ``max_behind_m`` metres behind the car (along its heading) come after the others
-    (our addition, ``LaneParams.start_behind_m``; inf, the default, is the paper's order).
+    0, the default, is the paper's order).
     A side with no cone within ``radius_m`` takes its candidate from ``start_mask`` with
     ``reach_m`` (our addition, ``LaneParams.start_reach_m``; 0, the default, is the paper's)."""
     # One compiled loop (geometry_kernels.start_pairs_ranked; 0.1 ms of numpy calls before,
@@ -415,14 +373,13 @@ def starting_vertex_pairs(
     pts = np.ascontiguousarray(points, dtype=np.float64)
     out = gk.start_pairs_ranked(pts, float(pose.x), float(pose.y), math.cos(pose.yaw),
                                 math.sin(pose.yaw), float(radius_m), max(int(k), 1),
-                                float(min_width_m), float(max_behind_m))
+                                float(min_width_m))
     if out.shape[0] == 0 and reach_m > radius_m:
         # A side without a cone within the radius: the same order over start_mask's cones.
         sel = np.flatnonzero(start_mask(pts, pose, radius_m, reach_m))
         out = sel[gk.start_pairs_ranked(pts[sel], float(pose.x), float(pose.y),
                                         math.cos(pose.yaw), math.sin(pose.yaw), math.inf,
-                                        max(int(k), 1), float(min_width_m),
-                                        float(max_behind_m))]
+                                        max(int(k), 1), float(min_width_m))]
     return [(int(a), int(b)) for a, b in out]
 
 

@@ -24,7 +24,6 @@ __all__ = [
     "regularity_cost",
     "width_roughness",
     "width_second_differences",
-    "turn_roughness",
     "high_cost_mask",
     "edge_objective",
     "lane_cost",
@@ -106,7 +105,7 @@ def width_roughness(left_xy: np.ndarray, right_xy: np.ndarray) -> float:
     (``overlap_widths``' pairing), this form did better on the shared tracks (docs/clc.md at commit
     933288e).
     ``left_xy``, ``right_xy``: (n, 2) and (m, 2), metres, each ordered from the car forward.
-    CLC's dive judge (``clc.solver.dive_cost``) adds ``LaneParams.w_width_roughness`` times it
+    CLC's dive judge (``clc.refine.dive_cost``) adds ``LaneParams.w_width_roughness`` times it
     to RLD's objective: a false positive 0.6-1.5 m beside a true cone makes a line as smooth
     as the true one, but jogs the width."""
     return float(ck.width_roughness(
@@ -114,22 +113,12 @@ def width_roughness(left_xy: np.ndarray, right_xy: np.ndarray) -> float:
         np.ascontiguousarray(right_xy, dtype=np.float64).reshape(-1, 2)))
 
 
-def turn_roughness(xy: np.ndarray) -> float:
-    """How unevenly a boundary turns from cone to cone, rad^2 (ours, not in either paper): the
-    sum of squared differences of consecutive signed turns (``geometry_kernels.turn_angle``, as
-    in C_seg and eq. 20) along the open polyline ``xy`` ((n, 2), metres). 0 for a line or an
-    evenly coned circle; a false positive beside a straight edge zigzags it (docs/tuning.md
-    #w_turn_roughness). Fewer than 4 cones give 0."""
-    P = np.ascontiguousarray(xy, dtype=np.float64).reshape(-1, 2)
-    return float(ck.turn_roughness(P))
-
-
 def width_second_differences(query_xy: np.ndarray, target_xy: np.ndarray) -> np.ndarray:
     """The second differences (metres) of the matching-line lengths of the boundary
     ``query_xy`` to the boundary ``target_xy`` (each cone's distance to the target polyline,
     CLC eq. 9), in order: entry k belongs to query cone k + 1. Empty for fewer than 3 query
     cones or fewer than 2 target cones. ``width_roughness`` sums their squares;
-    ``clc.solver.jog_positions`` finds the large ones."""
+    ``clc.refine.jog_positions`` finds the large ones."""
     Q = np.asarray(query_xy, dtype=np.float64).reshape(-1, 2)
     T = np.asarray(target_xy, dtype=np.float64).reshape(-1, 2)
     if Q.shape[0] < 3 or T.shape[0] < 2:
@@ -364,14 +353,9 @@ def within_radius(points: np.ndarray, idx: np.ndarray, pose: Pose,
 
 def reach_costs(points: np.ndarray, pose: Pose, params: LaneParams, lanes, radius_m: float,
                 colors: np.ndarray | None = None) -> np.ndarray:
-    """For each open lane ``(left, right)`` of ``lanes`` (index sequences into ``points``, from the
-    car forward): RLD's objective (eq. 29, ``lane_cost``) of the lane with each boundary cut at
-    ``radius_m`` from the car (``within_radius``), plus ``params.w_width_roughness`` times the
-    ``width_roughness`` and ``params.w_turn_roughness`` times the sum of the ``turn_roughness`` of
-    the same cut boundaries (ours), plus ``params.w_color`` times their ``boundary_color_cost`` when
-    ``colors`` (side labels) are given. (K,) floats, equal to composing those functions lane by lane
-    (tests/test_costs.py), in one compiled loop: CLC's dive judge (``clc.solver.dive_costs``) weighs
-    5 lanes per call on average, and the Python calls cost more than the arithmetic."""
+    """(K,) for each open lane ``(left, right)`` of ``lanes``, cut at ``radius_m`` of the car
+    (``within_radius``): ``lane_cost`` (eq. 29, with ``colors``) plus ``params.w_width_roughness``
+    times the ``width_roughness`` (ours), in one compiled loop (CLC's judge, ``clc.refine``)."""
     if not (isinstance(radius_m, int | float) and math.isfinite(radius_m) and radius_m > 0):
         raise ValueError(f"radius_m must be a positive number of metres, got {radius_m!r}")
     lanes = list(lanes)
@@ -392,7 +376,7 @@ def reach_costs(points: np.ndarray, pose: Pose, params: LaneParams, lanes, radiu
                    float(params.heading_min_distance_m), float(params.w_angle),
                    float(params.angle_tolerance_rad), float(params.w_regularity),
                    math.log(params.regularity_tolerance) if params.w_regularity else 1.0,
-                   float(params.w_width_roughness), float(params.w_turn_roughness),
+                   float(params.w_width_roughness),
                    np.zeros(0, dtype=np.int64) if colors is None
                    else np.ascontiguousarray(colors, dtype=np.int64),
                    float(params.w_color), float(params.near_radius_m), out)

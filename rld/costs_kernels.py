@@ -55,22 +55,6 @@ def _turn(xy, k, i):
 
 
 @njit(cache=True)
-def turn_roughness(xy):
-    """Sum of the squared differences (rad^2) of consecutive signed turns at the interior
-    vertices 1..k-2 of the open polyline ``xy`` (k, 2); 0 for k < 4."""
-    k = xy.shape[0]
-    total = 0.0
-    if k < 4:
-        return total
-    prev = _turn(xy, k, 1)
-    for i in range(2, k - 1):
-        t = _turn(xy, k, i)
-        total += (t - prev) * (t - prev)
-        prev = t
-    return total
-
-
-@njit(cache=True)
 def _turn_var(xy, closed):
     """Population variance (rad^2) of the signed turns at the interior vertices of ``xy`` (k, 2):
     vertices 1..k-2 of an open polyline, all k vertices of a closed one (k >= 3)."""
@@ -302,17 +286,14 @@ def width_roughness(left, right):
 @njit(cache=True)
 def reach_costs(points, lflat, lptr, rflat, rptr, px, py, hx, hy, radius, expected, tolerance,
                 w_spacing, w_benefit, w_heading, min_distance, w_angle, angle_tolerance,
-                w_regularity, log_regularity, w_width_rough, w_turn_rough, labels, w_color,
+                w_regularity, log_regularity, w_width_rough, labels, w_color,
                 near_radius, out):
     """For each open lane k (left ``lflat[lptr[k]:lptr[k + 1]]``, right likewise; indices into
     ``points`` (N, 2), metres), both boundaries cut at ``radius`` from the car (``radius_cut``)
-    and ``out[k]`` = RLD's objective of the two cut paths (``open_path_costs``) + w_width_rough
-    times their ``width_roughness`` + w_turn_rough times the sum of their ``turn_roughness``
-    (each only when its weight is not 0), with w_color times the cut paths' colour cost
-    (``boundary_color`` of each, ``near_radius`` its start radius) when ``labels`` (side
-    labels, (N,) int64) is not empty, added in the order: objective, colour, width, turn
-    (``rld.costs.lane_cost`` then the roughness gives the same float):
-    ``rld.costs.reach_costs``."""
+    and ``out[k]`` = RLD's objective of the two cut paths (``open_path_costs``), + w_color
+    times their colour cost (``boundary_color``, ``near_radius`` its start radius) when
+    ``labels`` (side labels, (N,) int64) is not empty, + w_width_rough times their
+    ``width_roughness`` when not 0, in that order: ``rld.costs.reach_costs``."""
     two = np.empty(2)
     ptr = np.empty(3, dtype=np.int64)
     for k in range(lptr.shape[0] - 1):
@@ -338,7 +319,7 @@ def reach_costs(points, lflat, lptr, rflat, rptr, px, py, hx, hy, radius, expect
                                               near_radius)
                                + boundary_color(points, labels, R, False, px, py, hx, hy,
                                                 near_radius))
-        if w_width_rough != 0.0 or w_turn_rough != 0.0:
+        if w_width_rough != 0.0:
             lxy = np.empty((L.shape[0], 2))
             rxy = np.empty((R.shape[0], 2))
             for i in range(L.shape[0]):
@@ -347,10 +328,7 @@ def reach_costs(points, lflat, lptr, rflat, rptr, px, py, hx, hy, radius, expect
             for i in range(R.shape[0]):
                 rxy[i, 0] = points[R[i], 0]
                 rxy[i, 1] = points[R[i], 1]
-            if w_width_rough != 0.0:
-                cost += w_width_rough * width_roughness(lxy, rxy)
-            if w_turn_rough != 0.0:
-                cost += w_turn_rough * (turn_roughness(lxy) + turn_roughness(rxy))
+            cost += w_width_rough * width_roughness(lxy, rxy)
         out[k] = cost
 
 

@@ -53,7 +53,7 @@ def _flat(*arrays: np.ndarray) -> tuple[tuple[int, ...], list[np.ndarray]]:
     shape = first if all(a.shape == first for a in arrs[1:]) else \
         np.broadcast_shapes(*(a.shape for a in arrs))
     # Plain writeable contiguous copies for the numba kernels, broadcast by assignment
-    # (np.broadcast_arrays took 30 us a call, most of start_replacements' time).
+    # (np.broadcast_arrays took 30 us a call).
     out = []
     for a in arrs:
         x = np.empty(shape, dtype=np.float64)

@@ -575,14 +575,13 @@ def _pair_before(a, b):
 
 
 @njit(cache=True)
-def start_pairs_ranked(pts, px, py, c, s, radius, k, min_width, max_behind):
+def start_pairs_ranked(pts, px, py, c, s, radius, k, min_width):
     """The ``k`` best (left, right) start pairs of ``rld.constraints.starting_vertex_pairs``
-    (CLC IV-C with our two orderings), (m, 2) int64, m <= k: the cones within ``radius`` of
-    the car at (px, py) with heading (c, s) = (cos yaw, sin yaw), left ones at local y > 0 and
-    right ones at y < 0; ordered by (narrower than ``min_width``, a cone more than
-    ``max_behind`` behind the car, the asymmetry rounded to a micrometre, the summed distance
-    from the car, the left index, the right index), each ascending: the order of the numpy
-    form's ``np.lexsort``, in one loop."""
+    (CLC IV-C with our ordering), (m, 2) int64, m <= k: the cones within ``radius`` of the car
+    at (px, py) with heading (c, s) = (cos yaw, sin yaw), left ones at local y > 0 and right
+    ones at y < 0; ordered by (narrower than ``min_width``, the asymmetry rounded to a
+    micrometre, the summed distance from the car, the left index, the right index), each
+    ascending: the order of the numpy form's ``np.lexsort``, in one loop."""
     n = pts.shape[0]
     lx = np.empty(n)
     ly = np.empty(n)
@@ -613,29 +612,28 @@ def start_pairs_ranked(pts, px, py, c, s, radius, k, min_width, max_behind):
     out = np.empty((kk, 2), dtype=np.int64)
     if nl == 0 or nr == 0:
         return out[:0]
-    keys = np.empty((kk, 6))
-    key = np.empty(6)
+    keys = np.empty((kk, 5))
+    key = np.empty(5)
     m = 0
     for a in range(nl):
         for b in range(nr):
             dx = lx[a] - rx[b]
             key[0] = 1.0 if math.hypot(dx, ly[a] - ry[b]) < min_width else 0.0
-            key[1] = 1.0 if (lx[a] < -max_behind or rx[b] < -max_behind) else 0.0
-            key[2] = np.rint(math.hypot(dx, ly[a] + ry[b]) * 1e6) / 1e6
-            key[3] = math.hypot(lx[a], ly[a]) + math.hypot(rx[b], ry[b])
-            key[4] = li[a]
-            key[5] = ri[b]
+            key[1] = np.rint(math.hypot(dx, ly[a] + ry[b]) * 1e6) / 1e6
+            key[2] = math.hypot(lx[a], ly[a]) + math.hypot(rx[b], ry[b])
+            key[3] = li[a]
+            key[4] = ri[b]
             if m == kk and not _pair_before(key, keys[m - 1]):
                 continue
             # Insert in order, dropping the last when full.
             j = m if m < kk else kk - 1
             while j > 0 and _pair_before(key, keys[j - 1]):
-                for q in range(6):  # loops, not row assignments (see grow_int)
+                for q in range(5):  # loops, not row assignments (see grow_int)
                     keys[j, q] = keys[j - 1, q]
                 out[j, 0] = out[j - 1, 0]
                 out[j, 1] = out[j - 1, 1]
                 j -= 1
-            for q in range(6):
+            for q in range(5):
                 keys[j, q] = key[q]
             out[j, 0] = li[a]
             out[j, 1] = ri[b]

@@ -121,9 +121,8 @@ def as_cones(cones: Any, min_cones: int = MIN_CONES) -> np.ndarray:
 
 #: LaneParams fields for which 0 is meaningful.
 _MAY_BE_ZERO = ("window_behind_m", "nvd_distance_weight", "nvd_lookahead_weight",
-                "contested_margin", "skipped_cone_m", "start_min_width_m", "start_behind_m",
-                "start_lookback_m", "start_reach_m", "duplicate_radius_m",
-                "w_regularity", "w_width_roughness", "w_turn_roughness", "w_color",
+                "contested_margin", "start_min_width_m", "start_lookback_m", "start_reach_m",
+                "duplicate_radius_m", "w_regularity", "w_width_roughness", "w_color",
                 "nvd_color_weight", "rank_color_weight")
 
 
@@ -179,12 +178,8 @@ class LaneParams:
     straight to corner. Chosen by measurement: docs/tuning.md#w_regularity."""
     w_width_roughness: float = 0.2
     """Weight of the width roughness (``rld.costs.width_roughness``, per m^2; ours) in CLC's dive
-    judge (``clc.solver.dive_cost``); 0 turns it off. The roughness of true lanes in hairpins
+    judge (``clc.refine.dive_cost``); 0 turns it off. The roughness of true lanes in hairpins
     caps it. Chosen by measurement: docs/tuning.md#w_width_roughness."""
-    w_turn_roughness: float = 2.0
-    """Weight of the turn roughness (``rld.costs.turn_roughness``, per rad^2; ours) in CLC's dive
-    judge (``clc.solver.dive_cost``); 0 turns it off. Larger weights drop true cones where a real
-    boundary's turn changes abruptly. Chosen by measurement: docs/tuning.md#w_turn_roughness."""
     regularity_tolerance: float = 2.0
     """rho_t of the regularity cost (``w_regularity``; ours): the ratio of consecutive edge
     lengths that costs 1, dimensionless, above 1. Chosen by measurement of the true edges:
@@ -242,22 +237,14 @@ class LaneParams:
     """CLC's contested-choice dives (ours; ``clc.search.contested_dives``): a choice of the lane
     whose runner-up scored at most this much higher in the next-vertex decider (its radians) is
     searched again; 0: no dives. Chosen by measurement: docs/tuning.md#contested_margin."""
-    skipped_cone_m: float = 0.4
-    """Second trigger of CLC's dives (ours; ``clc.search_kernels.skipped_positions``), metres: an
-    edge of the ranked lane passing an unused cone at most this far inside it is revisited like a
-    close call; 0 turns it off. Chosen by measurement: docs/tuning.md#skipped_cone_m."""
     start_pairs: int = 4
-    """How many start pairs CLC tries, most symmetric first (IV-C), while the deepest candidate
-    has under ``clc.solver.MIN_START_DEPTH`` cones a side; the deepest wins (ours; 1 is the
-    paper's single pair). Chosen by measurement: docs/tuning.md#start_pairs."""
+    """How many start pairs CLC tries, most symmetric first (IV-C), the next only while none has
+    given a lane (ours; 1 is the paper's single pair). Chosen by measurement:
+    docs/tuning.md#start_pairs."""
     start_min_width_m: float = 3.0
     """CLC's start pairs (IV-C) whose two cones are closer than this, metres, come after every
     wider pair (ours; 0 is the paper's order): the rules guarantee a 3 m track. Chosen by
     measurement: docs/tuning.md#start_min_width_m."""
-    start_behind_m: float = 2.5
-    """CLC's start pairs (IV-C) with a cone more than this far behind the car, metres along its
-    heading, come after the others of their width group (ours; ``near_radius_m`` or more is the
-    paper's order). Chosen by measurement: docs/tuning.md#start_behind_m."""
     start_lookback_m: float = 3.0
     """CLC seeks its start pairs (IV-C) about the point this far behind the car, metres along its
     heading, first, then about the car; the lane is returned from its first cone not behind the

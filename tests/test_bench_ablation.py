@@ -103,25 +103,22 @@ def test_verdict(diffs, want):
     assert B.verdict(diffs) == want
 
 
-def test_variants_switch_existing_knobs_and_restore_them():
-    import importlib
+def test_variants_switch_existing_knobs():
+    from dataclasses import fields
+
+    from clc.refine import Refinement
 
     names = [v.name for v in B.VARIANTS]
     assert len(set(names)) == len(names)
     for v in B.VARIANTS:
-        assert v.params or v.constants, v.name
-        saved = {k: getattr(importlib.import_module(k.rsplit(".", 1)[0]), k.rsplit(".", 1)[1])
-                 for k in v.constants}
-        with B.switched(v) as params:
-            assert isinstance(params, LaneParams)
-            for k, value in v.params.items():
-                assert getattr(params, k) == value != getattr(LaneParams(), k)
-            for k, value in v.constants.items():
-                mod, attr = k.rsplit(".", 1)
-                assert getattr(importlib.import_module(mod), attr) == value != saved[k]
-        for k, value in saved.items():
-            mod, attr = k.rsplit(".", 1)
-            assert getattr(importlib.import_module(mod), attr) == value
+        assert v.params or v.refine, v.name
+        params, refine = B.configured(v)
+        assert isinstance(params, LaneParams) and isinstance(refine, Refinement)
+        for k, value in v.params.items():
+            assert getattr(params, k) == value != getattr(LaneParams(), k)
+        assert set(v.refine) <= {f.name for f in fields(Refinement)}
+        for k, value in v.refine.items():
+            assert getattr(refine, k) == value != getattr(Refinement(), k)
 
 
 def test_units_spread_over_the_cells():
@@ -142,12 +139,12 @@ def test_run_lap_records_agree_with_run_protocol():
 
     track = generate_track(7)
     unit = B.Unit("generated", track.name, 1, 30.0, 0.3)
-    variants = [B.BASELINE, next(v for v in B.VARIANTS if v.name == "no_trim_behind")]
+    variants = [B.BASELINE, next(v for v in B.VARIANTS if v.name == "no_start_lookback")]
     mine = B.run_lap(variants, track, unit, every=15)
     for v in variants:
-        with B.switched(v) as params:
-            ref = run_protocol([track], method="clc", params=params, range_m=30.0, fp_rate=0.3,
-                               seed=1, every=15, stateful=True)
+        params, _ = B.configured(v)
+        ref = run_protocol([track], method="clc", params=params, range_m=30.0, fp_rate=0.3,
+                           seed=1, every=15, stateful=True)
         got = mine[v.name]
         assert [r.pose for r in ref] == [g["pose"] for g in got]
         for r, g in zip(ref, got, strict=True):
@@ -167,12 +164,9 @@ def test_compare_gives_no_verdict_on_one_lap_a_cell():
 
 
 def test_combined_variant_has_every_switch():
-    a = next(v for v in B.VARIANTS if v.name == "no_unhook")
-    b = next(v for v in B.VARIANTS if v.name == "no_turn_roughness")
+    a = next(v for v in B.VARIANTS if v.name == "no_trim_behind")
+    b = next(v for v in B.VARIANTS if v.name == "no_width_roughness")
     c = B.combined([a, b], "both")
-    assert c.constants == a.constants and c.params == b.params
-    with B.switched(c) as params:
-        import clc.solver
-
-        assert clc.solver.UNHOOK is False and params.w_turn_roughness == 0.0
-    assert clc.solver.UNHOOK is True
+    assert c.refine == a.refine and c.params == b.params
+    params, refine = B.configured(c)
+    assert refine.trim_behind is False and params.w_width_roughness == 0.0

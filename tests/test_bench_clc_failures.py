@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from clc.solver import dive_cost
+from clc.refine import dive_cost
 from rld.cli import _benchmark_module
 from rld.generator import generate_track
 from rld.simulation import simulate_lap
@@ -105,7 +105,7 @@ def test_classes(frame):
     assert want < 0
     assert kind == "search_miss"
     assert gap == pytest.approx(want)
-    # Cut beyond the reach (DIVE_REACH_M) the judge sees no difference: not a search miss.
+    # Cut beyond the reach (Refinement.reach_m) the judge sees no difference: not a search miss.
     kind, gap = B.classify(frame, tl[:-2], tr, PARAMS)
     assert (kind, gap) == ("judge_prefers_wrong", 0.0)
     # The same truth under a maximum width below the lane's: infeasible, no gap.

@@ -147,8 +147,6 @@ def test_solve_reports_bad_input(tmp_path):
     (["bench", "fp-clearance", "--cells", "30:1"], ["--cells", "0 <= rate < 1"]),
     (["bench", "fp-clearance", "--cells", "0:0.1"], ["--cells"]),
     (["bench", "fp-clearance", "--plot", "/nonexistent/dir/p.png"], ["--plot"]),
-    (["bench", "clc-judge", "--tracks", "x"], ["--tracks"]),
-    (["bench", "clc-judge", "--every", "0"], ["--every"]),
 ])
 def test_bad_option_values_are_one_line_usage_errors(args, words):
     _assert_user_error(CliRunner().invoke(main, args), *words)

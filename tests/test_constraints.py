@@ -356,11 +356,10 @@ def test_heading_mask_counts_the_edges_at_a_far_first_cone():
         [True, True, False]
 
 
-def _start_pairs_numpy(points, pose, radius_m, k=1, min_width_m=0.0, max_behind_m=math.inf):
+def _start_pairs_numpy(points, pose, radius_m, k=1, min_width_m=0.0):
     """The numpy form that ``starting_vertex_pairs`` compiled (geometry_kernels
     .start_pairs_ranked), kept as the reference: every (left, right) pair of cones within the
-    radius, sorted by np.lexsort on (narrow, behind, asymmetry to a micrometre, reach, left,
-    right)."""
+    radius, sorted by np.lexsort on (narrow, asymmetry to a micrometre, reach, left, right)."""
     near = np.flatnonzero(C.near_car_mask(points, pose, radius_m))
     if near.size < 2:
         return []
@@ -373,10 +372,9 @@ def _start_pairs_numpy(points, pose, radius_m, k=1, min_width_m=0.0, max_behind_
     asym = np.hypot(dx, ll[:, None, 1] + rl[None, :, 1])
     narrow = np.hypot(dx, ll[:, None, 1] - rl[None, :, 1]) < float(min_width_m)
     reach = np.hypot(ll[:, 0], ll[:, 1])[:, None] + np.hypot(rl[:, 0], rl[:, 1])[None, :]
-    behind = (ll[:, 0] < -max_behind_m)[:, None] | (rl[:, 0] < -max_behind_m)[None, :]
     li, ri = np.meshgrid(lefts, rights, indexing="ij")
     order = np.lexsort((ri.ravel(), li.ravel(), reach.ravel(), np.round(asym.ravel(), 6),
-                        behind.ravel(), narrow.ravel()))
+                        narrow.ravel()))
     return [(int(li.ravel()[q]), int(ri.ravel()[q])) for q in order[: max(int(k), 1)]]
 
 
@@ -390,26 +388,22 @@ def test_starting_vertex_pairs_groups_hand_worked():
     narrow = np.array([[0, 1.5], [0.5, 2.5], [0, -1.5]], float)
     assert C.starting_vertex_pairs(narrow, CAR, 4.5, 2) == [(0, 2), (1, 2)]
     assert C.starting_vertex_pairs(narrow, CAR, 4.5, 2, min_width_m=3.5) == [(1, 2), (0, 2)]
-    # A cone more than 0.5 m behind the car puts its pairs after the others.
-    back = np.array([[-1, 2], [1, 1.5], [0, -2]], float)
-    assert C.starting_vertex_pairs(back, CAR, 4.5, 2) == [(0, 2), (1, 2)]
-    assert C.starting_vertex_pairs(back, CAR, 4.5, 2, max_behind_m=0.5) == [(1, 2), (0, 2)]
     # No right cone within the radius: no pair.
     assert C.starting_vertex_pairs(pts[[0, 1, 3]], CAR, 4.5, 3) == []
 
 
 @settings(max_examples=150, deadline=None)
 @given(st.integers(0, 10_000), st.integers(2, 40), st.integers(1, 6),
-       st.sampled_from([0.0, 2.0, 3.0]), st.sampled_from([math.inf, 2.5, 0.0]))
-def test_starting_vertex_pairs_match_the_numpy_form(seed, n, k, min_width, behind):
+       st.sampled_from([0.0, 2.0, 3.0]))
+def test_starting_vertex_pairs_match_the_numpy_form(seed, n, k, min_width):
     rng = np.random.default_rng(seed)
     pts = rng.uniform(-6, 6, size=(n, 2))
     if seed % 3 == 0:  # exact mirror images: ties in the asymmetry, broken by the next keys
         pts = np.vstack([pts, pts * [1, -1]])
     pose = Pose(float(rng.uniform(-1, 1)), float(rng.uniform(-1, 1)),
                 float(rng.uniform(-math.pi, math.pi)))
-    want = _start_pairs_numpy(pts, pose, 4.5, k, min_width, behind)
-    assert C.starting_vertex_pairs(pts, pose, 4.5, k, min_width, behind) == want
+    want = _start_pairs_numpy(pts, pose, 4.5, k, min_width)
+    assert C.starting_vertex_pairs(pts, pose, 4.5, k, min_width) == want
 
 
 # --- angle triples and the turn limit ---------------------------------------------------------
@@ -592,103 +586,4 @@ def test_starting_vertex_pairs_narrow_pairs_come_last():
         C.starting_vertex_pairs(pts, CAR, 4.5, 4)
 
 
-def test_starting_vertex_pairs_far_behind_come_later():
-    # Car frame, metres: left cones 0 (3.4 m behind, the false positive of track 2, pose 48)
-    # and 2 (beside the car), right cones 1 and 3. Asymmetries |mirror(left) - right| by hand:
-    # (0, 1) 0.28, (2, 3) 0.50, (2, 1) 3.42, (0, 3) 3.91. Widths: (0, 1) 3.81, (2, 3) 4.01,
-    # (2, 1) 5.25, (0, 3) 5.45.
-    pts = np.array([[-3.4, 2.0], [-3.2, -1.8], [0.2, 2.2], [0.5, -1.8]], float)
-    assert C.starting_vertex_pairs(pts, CAR, 4.5, 4) == [(0, 1), (2, 3), (2, 1), (0, 3)]
-    # Pairs with a cone more than 2.5 m behind go after the others, in the same order.
-    assert C.starting_vertex_pairs(pts, CAR, 4.5, 4, max_behind_m=2.5) == [
-        (2, 3), (0, 1), (2, 1), (0, 3)]
-    assert C.starting_vertex_pairs(pts, CAR, 4.5, 4, max_behind_m=3.3) == [
-        (2, 3), (2, 1), (0, 1), (0, 3)]  # only cone 0 is farther behind than 3.3 m
-    assert C.starting_vertex_pairs(pts, CAR, 4.5, 4, max_behind_m=3.5) == \
-        C.starting_vertex_pairs(pts, CAR, 4.5, 4)
-    # Narrow pairs still go last, (0, 1) at 3.9 m; the behind rule orders within each group.
-    got = C.starting_vertex_pairs(pts, CAR, 4.5, 4, min_width_m=3.9, max_behind_m=2.5)
-    assert got == [(2, 3), (2, 1), (0, 3), (0, 1)]
-    got = C.starting_vertex_pairs(pts, CAR, 4.5, 4, min_width_m=4.1, max_behind_m=2.5)
-    assert got == [(2, 1), (0, 3), (2, 3), (0, 1)]  # (2, 3) narrow too
 
-
-# --- hooks (hook_position) -------------------------------------------------------------------
-
-
-def _straight_with_hook():
-    """A straight along +x, 4 m wide, cones every 4 m: left x = 0..16, right x = 0..20, then
-    the right boundary crosses to (20, 2), where the left one would go next."""
-    left = np.array([[4.0 * i, 2.0] for i in range(5)])
-    right = np.array([[4.0 * i, -2.0] for i in range(6)] + [[20.0, 2.0]])
-    return left, right
-
-
-def test_hook_position_hand_worked():
-    left, right = _straight_with_hook()
-    # The right side turns by pi/2 to reach (20, 2); the left side's end reaches it straight on.
-    assert C.hook_position(right, left, 5.5) == 6
-    assert C.hook_position(left, right, 5.5) == -1
-    # Without the hook, or with the hooked cone out of the left end's reach, none.
-    assert C.hook_position(right[:-1], left, 5.5) == -1
-    assert C.hook_position(right, left, 3.9) == -1
-    # Two hooked cones: the first one is where the hook begins.
-    right2 = np.vstack([right, [[24.0, 2.0]]])
-    assert C.hook_position(right2, left, 5.5) == 6
-    # A bend: the outer (right) side sweeps round the inner side's end at 4 m. Its cones are
-    # reached from the inner end with a large turn, so they are not a hook.
-    a = np.linspace(0.0, math.pi / 2, 5)
-    inner = np.column_stack([10 * np.sin(a[:3]), 12 - 10 * np.cos(a[:3])])
-    outer = np.column_stack([14 * np.sin(a), 12 - 14 * np.cos(a)])
-    assert C.hook_position(outer, inner, 5.5) == -1
-    # The thresholds: a turn of 0.85 rad onto a cone straight ahead of the other end is
-    # below HOOK_MIN_TURN_RAD (0.9); 1.0 rad is a hook.
-    for turn, want in ((0.85, -1), (1.0, 3)):
-        own = np.array([[0.0, -2.0], [4.0, -2.0], [8.0, -2.0]])
-        c = own[-1] + 4.0 * np.array([math.cos(turn), math.sin(turn)])
-        other = np.array([c - [8.0, 0.0], c - [4.0, 0.0]])
-        assert C.hook_position(np.vstack([own, c]), other, 5.5) == want
-
-
-def _hook_reference(own, other, d_max):
-    """``hook_position`` as a plain loop over the cones."""
-    for j in range(2, len(own)):
-        c = own[j]
-        if math.dist(c, other[-1]) > d_max:
-            continue
-        t_own = abs(float(geo.turn_angles(own[j - 2], own[j - 1], c)))
-        t_other = abs(float(geo.turn_angles(other[-2], other[-1], c)))
-        if t_own >= C.HOOK_MIN_TURN_RAD and t_other + C.HOOK_MARGIN_RAD <= t_own:
-            return j
-    return -1
-
-
-@settings(max_examples=150, deadline=None)
-@given(st.integers(0, 2**31 - 1), st.integers(0, 8), st.integers(0, 8))
-def test_hook_position_matches_a_loop(seed, n_own, n_other):
-    """Random boundaries in a 12 m square: the vectorized rule equals the loop."""
-    rng = np.random.default_rng(seed)
-    own, other = rng.uniform(0, 12, (n_own, 2)), rng.uniform(0, 12, (n_other, 2))
-    want = _hook_reference(own, other, 5.5) if n_own >= 3 and n_other >= 2 else -1
-    assert C.hook_position(own, other, 5.5) == want
-
-
-def _true_lanes_never_hook(lap, every):
-    p = LaneParams()
-    for k in range(0, len(lap), every):
-        f = lap.frame(k)
-        for a, b in ((f.gt_left, f.gt_right), (f.gt_right, f.gt_left)):
-            assert C.hook_position(f.cones[a], f.cones[b], p.max_cone_spacing_m) == -1, k
-
-
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_true_lanes_of_generated_tracks_never_hook(seed):
-    _true_lanes_never_hook(simulate_lap(generate_track(seed), range_m=30.0), every=2)
-
-
-@pytest.mark.parametrize("track", [1, 2, 3, 4, 6, 7])
-def test_true_lanes_of_the_shared_tracks_never_hook(dataset_dir, track):
-    """Every 2nd pose at R = 30 m (the truth ends sooner there, so more ends to hook onto)."""
-    from rld.tracks import load_dataset_track
-    _true_lanes_never_hook(simulate_lap(load_dataset_track(dataset_dir, track), range_m=30.0),
-                           every=2)
