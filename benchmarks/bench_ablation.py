@@ -511,6 +511,29 @@ def analyse(out: str | Path, set_name: str, variants: Sequence[Variant],
     return res
 
 
+def cell_table(laps: dict) -> str:
+    """Markdown, one row per (range, false-positive rate) of result lines ``laps``: poses,
+    geometric critical % at 1 m and 0.5 m, mean predicted / mean true length %, too-short %,
+    median / p95 latency ms (a lap's first call left out); the issue targets' figures."""
+    cells: dict = {}
+    for d in laps.values():
+        c = cells.setdefault((d["range_m"], d["fp_rate"]), [])
+        c += d["records"]
+    rows = ["| R (m) | FP | poses | geometric > 1 m % | > 0.5 m % | length ratio % | "
+            "too short % | median / p95 latency (ms) |", "|---|---|---|---|---|---|---|---|"]
+    for (r, fp), recs in sorted(cells.items()):
+        dev = np.array([x["deviation_m"] for x in recs])
+        pred = sum(x["pred_length_m"] for x in recs)
+        true = sum(x["true_length_m"] for x in recs)
+        short = np.mean([bool(x.get("too_short")) for x in recs])
+        lat = 1000.0 * np.array([x["latency_s"] for x in recs if not x["first_call"]])
+        times = (f"{np.median(lat):.2f} / {np.percentile(lat, 95):.2f}" if lat.size else "-")
+        rows.append(f"| {r:g} | {fp:.0%} | {dev.size} | {100 * np.mean(dev > 1.0):.2f} | "
+                    f"{100 * np.mean(dev > 0.5):.2f} | {100 * pred / max(true, 1e-12):.1f} | "
+                    f"{100 * short:.2f} | {times} |")
+    return "\n".join(rows)
+
+
 def commits(out: str | Path, set_name: str, variants: Sequence[Variant]) -> set[str]:
     """The commits the result files of ``set_name`` were written at."""
     found = set()
@@ -710,6 +733,10 @@ def main(argv: Sequence[str] | None = None) -> None:
                   "", f"Per part of the set, {s}:", "", part_markdown(results[s], variants),
                   "", f"Whole tracks as the bootstrap's unit, {s}:", "",
                   track_markdown(results[s], variants)]
+    for s in sets or results:
+        laps = read_results(result_path(args.out, s, ref), args.every)
+        if laps:
+            parts += ["", f"Per cell, {ref}, {s}:", "", cell_table(laps)]
     text = "\n".join(parts)
     print(text)
     if args.markdown:

@@ -170,3 +170,19 @@ def test_combined_variant_has_every_switch():
     assert c.refine == a.refine and c.params == b.params
     params, refine = B.configured(c)
     assert refine.trim_behind is False and params.w_width_roughness == 0.0
+
+
+def test_cell_table_hand_worked():
+    # Two laps of one cell: 10 poses, 3 beyond 1 m (2 m), 1 between 0.5 and 1 m, the rest
+    # 0.1 m; lengths 9 of 10 m each (90 %); one pose too short; latencies 1..10 ms with the
+    # first call of each lap left out.
+    laps = _results({"a": [True, True, False, False, False], "b": [True, False, False, False,
+                                                                    False]}, length=9.0)
+    laps["b"]["records"][1]["deviation_m"] = 0.7
+    laps["a"]["records"][2]["too_short"] = True
+    for k, rec in enumerate(laps["a"]["records"] + laps["b"]["records"]):
+        rec["latency_s"] = (k + 1) / 1000.0
+    row = B.cell_table(laps).splitlines()[2]
+    lat = np.array([2, 3, 4, 5, 7, 8, 9, 10], float)
+    assert row == (f"| 50 | 30% | 10 | 30.00 | 40.00 | 90.0 | 10.00 | {np.median(lat):.2f} / "
+                   f"{np.percentile(lat, 95):.2f} |")
