@@ -15,7 +15,9 @@ at ranges 30 and 50 m and false-positive rates 0, 10, 30 and 50 %, every ``--eve
 A variant is switched through ``LaneParams`` fields or through the fields of CLC's refinement
 stage (``clc.refine.Refinement``, given to the model's constructor); nothing in the package
 changes. The additions the ablation removed (docs/ablation.md) are no longer variants: the table
-there reran at commit 0cfe2c5.
+there reran at commit 0cfe2c5. RLD's two additions (``RLD_VARIANTS``, against ``rld_baseline``:
+``--variants rld_baseline,rld_no_lane_cuts,rld_no_heading_fallback --against rld_baseline``)
+are switched in ``rld.solver`` around each solve (``patched``).
 
 Results: one JSON-lines file per set and variant (``OUT/SET/VARIANT.jsonl``), a line per lap
 with its per-pose records (the geometric deviation, predicted and true lane length, latency).
@@ -39,12 +41,14 @@ zero; decided on ``choosing``, confirmed on ``reporting``.
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import math
 import subprocess
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -68,10 +72,14 @@ class Variant:
     params: dict = field(default_factory=dict)
     refine: dict = field(default_factory=dict)
     tuning: str = ""  # its docs/tuning.md anchor
+    method: str = "clc"
+    #: RLD only: ``"module.NAME"``: value, set around each solve (``patched``).
+    patches: dict = field(default_factory=dict)
 
     @property
     def switch(self) -> str:
-        items = {**self.params, **{f"Refinement.{k}": v for k, v in self.refine.items()}}
+        items = {**self.params, **{f"Refinement.{k}": v for k, v in self.refine.items()},
+                 **{k.rsplit(".", 1)[1]: v for k, v in self.patches.items()}}
         parts = [f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in items.items()]
         return ", ".join(parts) or "(defaults)"
 
@@ -109,6 +117,20 @@ VARIANTS: tuple[Variant, ...] = (
             {"max_iterations": 2500}, tuning="max_iterations"),
 )
 
+#: RLD's two additions (issue 39, item 3), switched in ``rld.solver`` around each solve: the lane
+#: cuts (its optimum checked by the shared predicate, cut off and solved again; off: every lane
+#: accepted, as the paper's RLD returns its optimum) and the heading fallback.
+ACCEPT_ALL = "accept-all"
+RLD_BASELINE = Variant("rld_baseline", "today's RLD, its additions on", method="rld")
+RLD_VARIANTS: tuple[Variant, ...] = (
+    Variant("rld_no_lane_cuts", "RLD: lane cuts (the optimum checked, cut off, solved again)",
+            tuning="max_cone_spacing_m", method="rld",
+            patches={"rld.solver.lane_is_feasible": ACCEPT_ALL}),
+    Variant("rld_no_heading_fallback", "RLD: heading fallback (solved again without eq. 9's "
+            "row when no lane)", tuning="heading_fallback", method="rld",
+            patches={"rld.solver.HEADING_FALLBACK": False}),
+)
+
 #: Each set: the shared tracks' false-positive seeds, the generated set, its false-positive seed.
 SETS = {"choosing": ((0, 1, 2, 3, 4), "choosing", 0),
         "reporting": ((5, 6, 7, 8, 9), "reporting", 5)}
@@ -126,13 +148,32 @@ def combined(variants: Sequence[Variant], name: str = "combined") -> Variant:
 
 def variants_by_name(names: Sequence[str] | None = None) -> list[Variant]:
     """The baseline and the named variants (all when ``names`` is None), baseline first."""
-    known = {v.name: v for v in VARIANTS}
+    known = {v.name: v for v in (*VARIANTS, *RLD_VARIANTS, RLD_BASELINE)}
     if names is None:
         return [BASELINE, *VARIANTS]
     bad = [n for n in names if n not in known and n != BASELINE.name]
     if bad:
         raise ValueError(f"unknown variant(s) {bad}; known: {', '.join(known)}")
     return [BASELINE] + [known[n] for n in names if n != BASELINE.name]
+
+
+@contextmanager
+def patched(variant: Variant) -> Iterator[None]:
+    """``variant.patches`` set in their modules for the duration (``ACCEPT_ALL``: a predicate
+    that accepts every lane), then restored."""
+    old = []
+    try:
+        for key, value in variant.patches.items():
+            mod = importlib.import_module(key.rsplit(".", 1)[0])
+            attr = key.rsplit(".", 1)[1]
+            if not hasattr(mod, attr):
+                raise AttributeError(f"{key} does not exist")
+            old.append((mod, attr, getattr(mod, attr)))
+            setattr(mod, attr, (lambda *a, **k: True) if value == ACCEPT_ALL else value)
+        yield
+    finally:
+        for mod, attr, value in reversed(old):
+            setattr(mod, attr, value)
 
 
 def configured(variant: Variant) -> tuple:
@@ -221,7 +262,8 @@ def run_lap(variants: Sequence[Variant], track, unit: Unit, every: int) -> dict[
     solvers = {}
     for v in variants:
         params, refine = configured(v)
-        solvers[v.name] = LaneSolver(method="clc", params=params, options={"refine": refine})
+        solvers[v.name] = LaneSolver(method=v.method, params=params,
+                                     options={"refine": refine} if v.method == "clc" else None)
     out: dict[str, list] = {v.name: [] for v in variants}
     rng = np.random.default_rng(_key_seed(unit.key))
     for k in range(0, len(lap), every):
@@ -229,10 +271,11 @@ def run_lap(variants: Sequence[Variant], track, unit: Unit, every: int) -> dict[
         scores: dict[tuple, object] = {}
         for i in rng.permutation(len(variants)):
             v = variants[int(i)]
-            t0 = time.perf_counter()
-            lane = solvers[v.name].solve(frame.cones, frame.pose, time_limit_s=None,
-                                         colors=frame.colors)
-            latency = time.perf_counter() - t0
+            with patched(v):
+                t0 = time.perf_counter()
+                lane = solvers[v.name].solve(frame.cones, frame.pose, time_limit_s=None,
+                                             colors=frame.colors)
+                latency = time.perf_counter() - t0
             key = (lane.ok, lane.closed, lane.left.tobytes(), lane.right.tobytes())
             if key not in scores:
                 scores[key] = score_lane(frame, lane.left, lane.right, lane.ok, lane.closed)
@@ -689,7 +732,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     args = ap.parse_args(argv)
 
     if args.list:
-        for v in [BASELINE, *VARIANTS]:
+        for v in [BASELINE, *VARIANTS, RLD_BASELINE, *RLD_VARIANTS]:
             print(f"{v.name:24s} {v.switch:40s} {v.addition}")
         return
     if args.processes != 1:

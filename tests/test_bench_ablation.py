@@ -186,3 +186,19 @@ def test_cell_table_hand_worked():
     lat = np.array([2, 3, 4, 5, 7, 8, 9, 10], float)
     assert row == (f"| 50 | 30% | 10 | 30.00 | 40.00 | 90.0 | 10.00 | {np.median(lat):.2f} / "
                    f"{np.percentile(lat, 95):.2f} |")
+
+
+def test_rld_variants_patch_and_restore():
+    import rld.solver
+
+    before = (rld.solver.lane_is_feasible, rld.solver.HEADING_FALLBACK)
+    for v in B.RLD_VARIANTS:
+        assert v.method == "rld" and v.patches
+        with B.patched(v):
+            if "HEADING_FALLBACK" in v.switch:
+                assert rld.solver.HEADING_FALLBACK is False
+            else:
+                assert rld.solver.lane_is_feasible(None, None, None) is True
+        assert (rld.solver.lane_is_feasible, rld.solver.HEADING_FALLBACK) == before
+    assert [v.name for v in B.variants_by_name(["rld_baseline", "rld_no_lane_cuts"])] == [
+        "baseline", "rld_baseline", "rld_no_lane_cuts"]
