@@ -765,6 +765,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     ref = args.against
     results = {s: analyse(args.out, s, variants, args.resamples, args.boot_seed, args.every, ref)
                for s in ("choosing", "reporting") if result_path(args.out, s, ref).exists()}
+    variants = [v for v in variants if v.name != ref]  # the reference is no row of its own
     parts = [f"Every {args.every}th pose; differences are variant minus {ref} (without - "
              "with), % points (latency: ms), 95 % paired bootstrap intervals over laps.",
              *(baseline_line(results[s], s, ref)
