@@ -1228,3 +1228,22 @@ def test_start_lookback_takes_the_true_first_cone_track1(dataset_dir):
     assert not score_lane(f, lane.left, lane.right, lane.ok, lane.closed).critical_tolerant
     assert f.source[lane.right[0]] >= 0 and lane.right[0] in set(f.gt_right.tolist())
     assert lane.stats["trimmed_behind"] >= 1
+
+
+def test_refine_none_is_the_papers_pipeline():
+    """``refine=None``: no dive, no trim or ring-join drop, the ranked winner (closed when it
+    closes, IV-E); the same search and ranking as the default. A refine that is not a
+    ``Refinement`` is refused."""
+    xs = np.arange(6) * 3.5
+    pts = np.vstack([np.column_stack([xs, np.full(6, 1.75)]),
+                     np.column_stack([xs, np.full(6, -1.75)]), [[7.0, 1.9]]])
+    params = LaneParams(max_iterations=30, duplicate_radius_m=0.0)
+    paper = LaneSolver("clc", params, ranker="rld_cost", options={"refine": None})
+    lane = paper.solve(pts, POSE)
+    assert lane.ok and lane.stats["dives"] == 0 and lane.stats["dive_rounds"] == 0
+    assert lane.stats["trimmed_behind"] == 0 and lane.stats["dropped"] == 0
+    full = LaneSolver("clc", params, ranker="rld_cost").solve(pts, POSE)
+    assert full.stats["dives"] >= 1
+    assert lane.stats["iterations"] == 30 and full.stats["iterations"] > 30
+    with pytest.raises(ValueError, match="Refinement"):
+        LaneSolver("clc", options={"refine": {"rounds": 1}})
