@@ -83,6 +83,10 @@ DIVE_REACH_M = 25.0
 #: Rounds of dives: a dive whose lane wins has its own close calls revisited. Chosen by
 #: measurement: docs/tuning.md#dive_rounds.
 DIVE_ROUNDS = 3
+#: The dive judge's objective includes the colour cost (``LaneParams.w_color`` times
+#: ``rld.costs.boundary_color_cost``) when a call has colours. Off: with ``w_color = 2`` it
+#: raised the 0.5 m rate at A = 0.95 and 0.8. Chosen by measurement: docs/tuning.md#judge_color.
+JUDGE_COLOR = False
 #: The close-call dives (``contested_dives`` at ``LaneParams.contested_margin``); False turns
 #: them off alone, keeping the rest of the dive rounds (for benchmarks/bench_ablation.py).
 CONTESTED_DIVES = True
@@ -342,6 +346,7 @@ class ClcModel:
             self.ranker_name = "longest (no learned model)"
         self._prev: tuple[np.ndarray, np.ndarray] | None = None
         self._colors: np.ndarray | None = None  # this call's side labels (``solve``)
+        self._judge_colors: np.ndarray | None = None  # the dive judge's (JUDGE_COLOR)
         #: Called as ``judge_hook(points, pose, winner, contenders)`` before each decision of
         #: the dive judge (``_cheapest``): ``winner`` is (left, right, closed, score), each
         #: contender (left, right, closed, score or None for an unchecked local edit). For
@@ -442,7 +447,7 @@ class ClcModel:
             if not contenders:
                 break
             if cost is None:
-                cost = dive_cost(points, pose, p, *winner[:3], self._colors)
+                cost = dive_cost(points, pose, p, *winner[:3], self._judge_colors)
             if self.judge_hook is not None:
                 self.judge_hook(points, pose, winner, contenders)
             best, best_cost, _ = self._cheapest(points, pose, contenders, cost)
@@ -463,7 +468,7 @@ class ClcModel:
             if not trials:
                 break
             if cost is None:
-                cost = dive_cost(points, pose, p, *winner[:3], self._colors)
+                cost = dive_cost(points, pose, p, *winner[:3], self._judge_colors)
             trials = [(a, b, False, None) for a, b in trials]
             if self.judge_hook is not None:
                 self.judge_hook(points, pose, winner, trials)
@@ -482,7 +487,7 @@ class ClcModel:
         check costs more than the judge; a dive's lanes are feasible already), and is scored by
         the ranker only if it wins. Returns (the pick or None, its cost, local edits checked)."""
         p = self.params
-        costs = dive_costs(points, pose, p, contenders, self._colors)
+        costs = dive_costs(points, pose, p, contenders, self._judge_colors)
         checked = 0
         for i in sorted(range(len(contenders)),
                         key=lambda i: costs[i] if math.isfinite(costs[i]) else math.inf):
@@ -516,6 +521,7 @@ class ClcModel:
               confidence=None) -> Lane:
         t0 = time.perf_counter()
         self._colors = colors
+        self._judge_colors = colors if JUDGE_COLOR else None
         # The compiled searches have no clock (max_iterations bounds each); the budget is
         # checked between them: past it, the searches that refine a lane already found (the
         # runner-up start pairs once a lane exists, the trapped search's rerun, the dives) are
@@ -565,6 +571,11 @@ class ClcModel:
                      n_candidates=len(res.candidates), n_cones_used=int(points.shape[0]))
         if confidence is not None:
             stats["note"] = "CLC does not use confidence (section III-A)"
+        if colors is not None and not (JUDGE_COLOR or self.params.nvd_color_weight
+                                       or self.params.rank_color_weight):
+            stats["note"] = "; ".join(filter(None, [stats.get("note"), (
+                "colors unused: nvd_color_weight = rank_color_weight = 0 and JUDGE_COLOR off "
+                "(docs/tuning.md#nvd_color_weight)")]))
         if res.start is None:
             self._prev = None
             return Lane.not_found(points, f"no cone within {self.params.near_radius_m} m of the "
