@@ -1,12 +1,15 @@
-"""Choosing CLC's colour weights (issue 41): geometric critical rates of ``clc`` on one set of
-DESIGN.md ("Choosing and reporting") for each setting of (``nvd_color_weight``,
-``rank_color_weight``, ``w_color``: the dive judge's) at each colour accuracy, beside the
+"""Choosing the colour weights (issue 41): geometric critical rates of one method (``clc`` by
+default) on one set of DESIGN.md ("Choosing and reporting") for each setting of
+(``nvd_color_weight``, ``rank_color_weight``, ``w_color``) at each colour accuracy, beside the
 colourless run, with each setting's paired change against colourless (the same poses).
+``w_color`` is RLD's weight, and CLC's dive judge's: a setting with ``w_color > 0`` runs CLC
+with ``clc.solver.JUDGE_COLOR`` on (the workers are forked after it is set), one with 0 with it
+off.
 
     python -m benchmarks.bench_color_weights --set choosing --every 32 --generated 4 \\
         --accuracies 0.95,0.8 --weights 0.5:1:2,0:0:2,0.25:0:0 --out colour_weights
 
-A setting is ``nvd:rank:judge``. Writes ``<out>/<setting>_A<acc>.json`` (every pose; skipped
+A setting is ``nvd:rank:w_color``. Writes ``<out>/<setting>_A<acc>.json`` (every pose; skipped
 when present, so a run can be resumed or extended) and prints, per setting and accuracy, the
 pooled rates > 1 m / > 0.5 m (%), the mean lane length (% of the true), and the poses where
 the setting is critical at 0.5 m and colourless is not, and the reverse.
@@ -33,7 +36,7 @@ def parse_setting(text: str) -> tuple[float, float, float]:
     """``"0.25:0.5:2"`` -> (0.25, 0.5, 2.0): nvd_color_weight, rank_color_weight, w_color."""
     parts = [float(v) for v in text.split(":")]
     if len(parts) != 3 or any(v < 0 or not math.isfinite(v) for v in parts):
-        raise ValueError(f"a setting is nvd:rank:judge, three weights >= 0; got {text!r}")
+        raise ValueError(f"a setting is nvd:rank:w_color, three weights >= 0; got {text!r}")
     return parts[0], parts[1], parts[2]
 
 
@@ -96,9 +99,10 @@ def main(argv=None) -> None:
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--set", default="choosing", choices=sorted(bc.SETS))
+    ap.add_argument("--method", default="clc")
     ap.add_argument("--accuracies", default="0.95,0.8")
     ap.add_argument("--weights", required=True,
-                    help="comma-separated settings nvd:rank:judge (w_color of the dive judge)")
+                    help="comma-separated settings nvd:rank:w_color")
     ap.add_argument("--every", type=int, default=32)
     ap.add_argument("--generated", type=int, default=4)
     ap.add_argument("--processes", type=int, default=None)
@@ -110,15 +114,22 @@ def main(argv=None) -> None:
     accs = [float(v) for v in a.accuracies.split(",") if v.strip()]
 
     def load_or_run(path: Path, acc, params) -> list[dict]:
+        import clc.solver
+
         if path.exists():
             return json.loads(path.read_text())
-        recs = bc.run(a.set, ["clc"], [acc], every=a.every, generated=a.generated,
-                      processes=a.processes, params=params)
+        judge = clc.solver.JUDGE_COLOR
+        clc.solver.JUDGE_COLOR = params is not None and params.w_color > 0
+        try:
+            recs = bc.run(a.set, [a.method], [acc], every=a.every, generated=a.generated,
+                          processes=a.processes, params=params)
+        finally:
+            clc.solver.JUDGE_COLOR = judge
         path.write_text(json.dumps(recs))
         return recs
 
     base = load_or_run(out / "colourless.json", None, None)
-    lines = ["| setting (nvd, rank, judge) | A | poses | > 1 m % | > 0.5 m % | length % | "
+    lines = ["| setting (nvd, rank, w_color) | A | poses | > 1 m % | > 0.5 m % | length % | "
              "0.5 m vs colourless: worse / better poses | difference at 0.5 m, % points "
              "[95 % lap-bootstrap interval] |", "|---|---|---|---|---|---|---|---|",
              summary_row("colourless", None, base, None)]
