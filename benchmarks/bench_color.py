@@ -50,9 +50,10 @@ def tracks(set_name: str, generated: int) -> list:
 def run(set_name: str = "reporting", methods: Sequence[str] = ("rld", "clc"),
         accuracies: Sequence[float | None] = ACCURACIES, unknown: float = UNKNOWN,
         ranges=(30.0, 50.0), fp_rates=(0.0, 0.1, 0.3, 0.5), every: int = 4,
-        generated: int = 8, processes: int | None = None) -> list[dict]:
+        generated: int = 8, processes: int | None = None, params=None) -> list[dict]:
     """Every (accuracy, method, track, range, rate, seed) of the set; records as dicts with
-    ``accuracy`` (NaN: colourless) and ``base`` (the method's name) added."""
+    ``accuracy`` (NaN: colourless) and ``base`` (the method's name) added. ``params``: every
+    method's ``LaneParams`` (default: the defaults)."""
     from rld.report import evaluate, parse_method
 
     specs = [parse_method(m) for m in methods]
@@ -61,7 +62,8 @@ def run(set_name: str = "reporting", methods: Sequence[str] = ("rld", "clc"),
     for acc in accuracies:
         color = None if acc is None else (float(acc), float(unknown))
         recs = evaluate(chosen, specs, ranges=ranges, fp_rates=fp_rates, every=every,
-                        seed=SETS[set_name], processes=processes, color=color)
+                        seed=SETS[set_name], processes=processes, color=color,
+                        params=params)
         for r in recs:
             d = r.to_dict()
             d["accuracy"] = math.nan if acc is None else float(acc)

@@ -77,6 +77,9 @@ class Refinement:
     trim_behind: bool = True
     """Return an open lane from each boundary's first cone not behind the car
     (``trim_behind``)."""
+    judge_color: bool = False
+    """The judge's objective includes ``LaneParams.w_color`` times the colour cost when a call
+    has colours; off: with ``w_color`` 2 it raised the 0.5 m rate at A = 0.95 and 0.8."""
 
 
 #: The refinement ``ClcModel`` runs by default.
@@ -91,9 +94,11 @@ def refine(points: np.ndarray, pose: Pose, params: LaneParams, res: SearchResult
            ) -> tuple[Lane4, dict, int, bool]:
     """The stage: dive rounds (when ``res`` is not complete and ``params.contested_margin`` >
     0), closing (IV-E), ring-join drop, trim-behind. ``score(candidates, features)``: the
-    ranker's. Returns (lane, ``COUNTS``, dive iterations, cut short by ``deadline``)."""
+    ranker's; ``colors`` reach the judge only with ``edits.judge_color``. Returns (lane,
+    ``COUNTS``, dive iterations, cut short by ``deadline``)."""
     counts = dict.fromkeys(COUNTS, 0)
     iterations, cut = 0, False
+    colors = colors if edits.judge_color else None  # the judge's; the search has its own
     if not res.complete and params.contested_margin > 0 and edits.rounds > 0:
         winner, iterations, cut = _rounds(points, pose, params, res, winner, score, colors,
                                           edits, deadline, counts)

@@ -188,6 +188,11 @@ class ClcModel:
                      n_candidates=len(res.candidates), n_cones_used=int(points.shape[0]))
         if confidence is not None:
             stats["note"] = "CLC does not use confidence (section III-A)"
+        if colors is not None and not (self.refine.judge_color or self.params.nvd_color_weight
+                                       or self.params.rank_color_weight):
+            stats["note"] = "; ".join(filter(None, [stats.get("note"), (
+                "colors unused: nvd_color_weight = rank_color_weight = 0 and "
+                "Refinement.judge_color off (docs/tuning.md#nvd_color_weight)")]))
         if res.start is None:
             self._prev = None
             stats["iterations"] = iterations

@@ -323,15 +323,15 @@ def solve_lane(
     ``orange``, ``big_orange``, ``unknown``; ``left``/``right`` for blue/yellow) or their codes
     (0 unknown, 1 yellow, 2 blue, 3 orange, 4 big orange); or ``class_probs``, (N, 5)
     probabilities in that order (``rld.colors``). Evidence, never a hard rule: a cost per cone
-    on the side its class contradicts (``rld.costs.color_cost``; ``LaneParams.w_color`` in RLD,
-    its incremental form and CLC's dive judge, ``nvd_color_weight`` in CLC's search order,
-    ``rank_color_weight`` after its ranker), a preference in the nearest-neighbour chain; the
-    fitted baseline (``huang``) ignores it. ``confidence``: optional per-cone detection
-    confidence in [0, 1], a cost for RLD (``LaneParams.w_confidence``). ``time_limit_s``: the
-    solve's time budget (RLD default 0.4 s; CLC is bounded by ``params.max_iterations``
-    instead). ``ranker``: the CLC ranker (default
-    ``learned``). Duplicate cones are merged first and a lane has two cones a side at least,
-    whatever the method (``LaneSolver.solve``).
+    on the side its class contradicts (``rld.costs.color_cost``; ``LaneParams.w_color`` in RLD
+    and its incremental form), a preference in the nearest-neighbour chain; CLC's uses
+    (``nvd_color_weight``, ``rank_color_weight``, ``clc.refine.Refinement.judge_color``) are off by
+    default (docs/tuning.md#nvd_color_weight); the fitted baseline (``huang``) ignores it.
+    ``confidence``: optional per-cone detection confidence in [0, 1], a cost for RLD
+    (``LaneParams.w_confidence``). ``time_limit_s``: the solve's time budget (RLD default
+    0.4 s; CLC is bounded by ``params.max_iterations`` instead). ``ranker``: the CLC ranker
+    (default ``learned``). Duplicate cones are merged first and a lane has two cones a side at
+    least, whatever the method (``LaneSolver.solve``).
     """
     return LaneSolver(method=method, params=params, backend=backend, ranker=ranker).solve(
         cones, pose, colors=colors, time_limit_s=time_limit_s, confidence=confidence,

@@ -186,8 +186,8 @@ class LaneParams:
     docs/tuning.md#regularity_tolerance."""
     w_color: float = 2.0
     """Weight of the colour cost (``rld.costs.boundary_color_cost``, 1 per contradicting cone), RLD
-    units (eq. 29); the RLD forms and CLC's dive judge; 0 turns it off. Chosen by measurement:
-    docs/tuning.md#w_color."""
+    units (eq. 29); the RLD forms, and CLC's dive judge with ``Refinement.judge_color`` (off);
+    0 turns it off. Source: our first choice (docs/tuning.md#w_color)."""
     w_confidence: float = 1.0
     """Weight of the confidence cost (ours; RLD section V): w (1 - confidence) for every cone the
     lane uses; only with ``confidence``. Source: our first choice."""
@@ -225,14 +225,14 @@ class LaneParams:
     """Look-ahead of CLC's next-vertex decider (ours, dimensionless): an option's score adds this
     times the best score of the step after it, so a cone that only a sharp turn can leave ranks
     lower; 0 is the one-step decider. Chosen by measurement: docs/tuning.md#nvd_lookahead_weight."""
-    nvd_color_weight: float = 0.5
+    nvd_color_weight: float = 0.0
     """Radians added to CLC's next-vertex decider score of a cone whose class contradicts the side
-    being extended (``clc.search.color_penalties``); 0 turns it off. Chosen by measurement:
-    docs/tuning.md#nvd_color_weight."""
-    rank_color_weight: float = 1.0
+    being extended (``clc.search.color_penalties``); 0: off (none helped at colour accuracy 0.95
+    without hurting at 0.8 or random labels). Chosen: docs/tuning.md#nvd_color_weight."""
+    rank_color_weight: float = 0.0
     """Subtracted from CLC's ranker score times the share of a lane's cones within 25 m whose
-    class contradicts their side (``clc.solver.ClcModel._score``; ranker units); 0: off. Chosen
-    by measurement: docs/tuning.md#rank_color_weight."""
+    class contradicts their side (``clc.solver.ClcModel._score``; ranker units); 0: off (no
+    change measured). Chosen by measurement: docs/tuning.md#rank_color_weight."""
     contested_margin: float = 0.2
     """CLC's contested-choice dives (ours; ``clc.search.contested_dives``): a choice of the lane
     whose runner-up scored at most this much higher in the next-vertex decider (its radians) is

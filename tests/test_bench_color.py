@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from benchmarks import bench_color as bc
 
 
@@ -23,3 +25,37 @@ def test_rates_lengths_and_the_table_row():
     assert bc._select(recs, "clc", 0.8) == []
     row = bc.tables(recs).splitlines()[2]
     assert row == "| clc | 30 | 10% | 4 | 25.00 / 50.00, 50 | 0.00 / 25.00, 75 | - |"
+
+
+def _pose(track, pose, dev, seed=0, range_m=30.0, fp=0.1):
+    return {"track": track, "pose": pose, "range_m": range_m, "fp_rate": fp, "seed": seed,
+            "deviation_m": dev}
+
+
+def test_weights_compare_pairs_poses_and_counts_both_ways():
+    from benchmarks import bench_color_weights as bw
+
+    base = [_pose("track 1", k, d) for k, d in enumerate((0.2, 0.7, 0.9, 0.0))]
+    other = [_pose("track 1", k, d) for k, d in enumerate((0.7, 0.2, 0.9, 0.0))]
+    other.append(_pose("track 2", 0, 3.0))  # no partner in base: not counted
+    assert bw.compare(base, other) == (1, 1)
+    assert bw.compare(base, other, d=0.8) == (0, 0)
+    point, low, high = bw.paired_interval(base, other[:4])
+    assert point == 0.0 and low <= 0.0 <= high
+    # Every pose critical: 2 of the 4 were not, +50 % points.
+    worse = [_pose("track 1", k, 2.0) for k in range(4)]
+    assert bw.paired_interval(base, worse)[0] == 50.0
+    assert bw.parse_setting("0.25:0:2") == (0.25, 0.0, 2.0)
+    with pytest.raises(ValueError, match="three weights"):
+        bw.parse_setting("0.25:1")
+
+
+def test_latency_table_reports_the_paired_ratio():
+    import numpy as np
+
+    from benchmarks import bench_color_latency as bl
+
+    lat = {"clc": np.array([[0.010, 0.011], [0.020, 0.020], [0.030, 0.033]])}
+    row = bl.table(lat).splitlines()[2]
+    assert row.startswith("| clc | 3 | 20.0 / ")
+    assert row.endswith("| 1.100 (1.000) |")
