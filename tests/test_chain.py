@@ -137,6 +137,13 @@ def test_no_lane_is_reported_as_by_the_single_window():
     assert lanes[0].message == lanes[1].message
 
 
+def test_the_default_rld_is_chained():
+    cones, n = straight()
+    lane = solve_lane(cones, CAR, time_limit_s=5.0)
+    assert LaneParams().max_windows == CHAINED.max_windows
+    np.testing.assert_array_equal(lane.left, np.arange(n))
+
+
 def test_max_windows_below_one_is_refused():
     with pytest.raises(ValueError, match="max_windows"):
         LaneParams(max_windows=0)
