@@ -78,7 +78,10 @@ class _RldMethod:
         if int(params.max_windows) > 1 and not self.sided:
             from rld.incremental import IncrementalRld
 
-            self.chainer = IncrementalRld(params, backend=backend)
+            # Frontier windows of max_cones, or the least that holds the junction and more
+            # free cones than the 2 x 3 released (IncrementalRld's check).
+            self.chainer = IncrementalRld(params, backend=backend,
+                                          frontier_max_cones=max(int(params.max_cones), 11))
 
     def solve(self, points, pose, colors=None, time_limit_s=None, confidence=None) -> Lane:
         from rld.solver import DEFAULT_TIME_LIMIT_S

@@ -114,12 +114,14 @@ class IncrementalRld:
             return None
         return out[0], out[1]
 
-    def _extend(self, points, L, R, time_limit_s, deadline=None):
+    def _extend(self, points, L, R, time_limit_s, deadline=None, keep_junction=False):
         """One frontier solve with ``back`` cones released per side, rolled back as
         docs/incremental.md (step 3) says. Returns ((L, R) or None, rollbacks, closes):
         ``closes`` when both frontier paths ended on their own boundary's first cone.
         ``deadline`` (a ``time.perf_counter()`` value): no attempt starts after it, and each
-        solve's budget ends at it."""
+        solve's budget ends at it. ``keep_junction``: a side too short to release ``back``
+        cones keeps its first two (``chain``: the car's window lane may be 4 cones a side)."""
+        tried = set()
         for attempt in range(self.max_rollbacks + 1):
             if deadline is not None:
                 left_s = deadline - time.perf_counter()
@@ -127,9 +129,12 @@ class IncrementalRld:
                     return None, attempt, False
                 time_limit_s = left_s if time_limit_s is None else min(time_limit_s, left_s)
             back = self.frontier_cones + 2 * attempt
-            kl, kr = L[: max(L.size - back, 0)], R[: max(R.size - back, 0)]
-            if kl.size < 2 or kr.size < 2:
+            floor = 2 if keep_junction else 0
+            kl = L[: max(L.size - back, min(floor, L.size))]
+            kr = R[: max(R.size - back, min(floor, R.size))]
+            if kl.size < 2 or kr.size < 2 or (kl.size, kr.size) in tried:
                 return None, attempt, False
+            tried.add((kl.size, kr.size))
             ql, al, qr, ar = int(kl[-2]), int(kl[-1]), int(kr[-2]), int(kr[-1])
             # Cones the frontier may use: the map minus the kept lane, plus the junction cones
             # and, for closing the loop (CLC IV-E), each boundary's first cone.
@@ -370,7 +375,7 @@ class IncrementalRld:
                 stop = "time budget"
                 break
             self._last_frontier = {}
-            new, _, closes = self._extend(points, L, R, None, deadline)
+            new, _, closes = self._extend(points, L, R, None, deadline, keep_junction=True)
             windows += 1
             step_s = max(step_s, time.perf_counter() - now)
             if new is None:

@@ -60,6 +60,20 @@ def test_the_chained_lane_is_the_whole_straight_cone_for_cone():
     assert "chain" not in one.stats
 
 
+def test_a_car_window_of_four_cones_a_side_still_chains():
+    # Left cones 1.3 m apart, right 5.4 m: the car's 20-cone window holds 16 left and 4 right,
+    # fewer than the 3 released plus the 2 junction cones; the chain keeps the right side's
+    # first two and re-solves the rest, and reaches the end of both sides.
+    xl, xr = np.arange(0.5, 150.0, 1.3), np.arange(0.5, 150.0, 5.4)
+    cones = np.vstack([np.column_stack([xl, np.full(xl.size, 2.0)]),
+                       np.column_stack([xr, np.full(xr.size, -2.0)])])
+    one = solve_lane(cones, CAR, params=LaneParams(max_windows=1), time_limit_s=5.0)
+    assert (one.left.size, one.right.size) == (16, 4)
+    lane = solve_lane(cones, CAR, params=CHAINED, time_limit_s=10.0)
+    np.testing.assert_array_equal(lane.left, np.arange(xl.size))
+    np.testing.assert_array_equal(lane.right, np.arange(xl.size, xl.size + xr.size))
+
+
 def test_the_chained_lane_is_the_whole_bend_cone_for_cone():
     cones, nl, nr, pose = bend()
     lane = solve_lane(cones, pose, params=CHAINED, time_limit_s=5.0)
