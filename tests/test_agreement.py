@@ -18,11 +18,10 @@ What holds today, and what these tests assert:
   diverges from the ground truth (each method's own failures, docs/results.md), and RLD never
   alone. Since RLD chains its windows (``LaneParams.max_windows``, 2026-12-07) the common
   horizon is the whole lane, not RLD's 20-cone window, and agreement fell to 73 of 105
-  (generated; 95 of 105 with the single window, issue 40) and 40 of 72 (dataset): of the 64
-  disagreements,
-  CLC alone diverges in 52 (past 20 m in all but one), both diverge in 11 (in 9 at the same
-  cone), and in one RLD's loop is the truth while CLC's skips a cone at its seam. The floors
-  sit 2 points under those figures, so that a regression in either method, or in the
+  (generated; 95 of 105 with the single window, issue 40) and 39 of 72 (dataset): of the 65
+  disagreements, CLC alone diverges in 52 (past 20 m in all but one), both diverge in 12,
+  and in one RLD's loop is the truth while CLC's skips a cone at its seam. The floors
+  sit at most 2 points under those figures, so that a regression in either method, or in the
   conventions they share, fails here with the poses and a picture of each disagreement.
 """
 
