@@ -49,7 +49,7 @@ def run(sizes=SIZES, backends=BACKENDS, n_tracks: int = 4, stride: int = 25,
     bar = tqdm(total=total, desc=f"{method} latency", disable=not progress)
     for backend in backends:
         for n in sizes:
-            params = LaneParams(max_cones=n)
+            params = LaneParams(max_cones=n, max_windows=1)  # one window of n cones
             # Compile and load everything once, outside the measurement.
             LaneSolver(method, params, backend).solve(frames[0][0].frame(0).cones,
                                                      frames[0][0].frame(0).pose)
@@ -89,7 +89,7 @@ def run_budget(sizes=(30, 40), budgets=(0.02, 0.05, 0.2), backends=BACKENDS,
                desc="rld budget", disable=not progress)
     for backend in backends:
         for n in sizes:
-            params = LaneParams(max_cones=n)
+            params = LaneParams(max_cones=n, max_windows=1)  # one window of n cones
             LaneSolver("rld", params, backend).solve(frames[0].cones, frames[0].pose)
             for budget in budgets:
                 over, statuses = [], []

@@ -244,7 +244,8 @@ def run(backend: str = "cpsat", n_cones: int = 12, poses: int = 60, range_m: flo
 
     from tqdm import tqdm
 
-    params = LaneParams(max_cones=n_cones, **overrides)
+    # RLD as published: one window of n cones (max_windows = 1) unless overridden.
+    params = LaneParams(**{"max_cones": n_cones, "max_windows": 1, **overrides})
     cells: dict[tuple[str, str], dict] = {}
     bar = tqdm(total=len(seeds) * len(topologies(0)) * len(RATIOS) * poses, desc="rld paper",
                disable=not progress)

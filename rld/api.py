@@ -62,7 +62,9 @@ class _HuangMethod:
 
 
 class _RldMethod:
-    """RLD (Brandes et al. 2020) with a reusable model and warm starts."""
+    """RLD (Brandes et al. 2020) with a reusable model and warm starts: the car's window, then
+    up to ``params.max_windows - 1`` frontier windows chained on its end within the call's
+    budget (``rld.incremental.IncrementalRld.chain``; not in the sided form)."""
 
     backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy", "auto")
     rankers = False
@@ -72,10 +74,26 @@ class _RldMethod:
         from rld.solver import RldModel
 
         self.model = RldModel(params, backend=backend, sided=self.sided)
+        self.chainer = None
+        if int(params.max_windows) > 1 and not self.sided:
+            from rld.incremental import IncrementalRld
+
+            # Frontier windows of max_cones, or the least that holds the junction and more
+            # free cones than the 2 x 3 released (IncrementalRld's check).
+            self.chainer = IncrementalRld(params, backend=backend,
+                                          frontier_max_cones=max(int(params.max_cones), 11))
 
     def solve(self, points, pose, colors=None, time_limit_s=None, confidence=None) -> Lane:
-        return self.model.solve(points, pose, time_limit_s=time_limit_s, colors=colors,
+        from rld.solver import DEFAULT_TIME_LIMIT_S
+
+        t0 = time.perf_counter()
+        lane = self.model.solve(points, pose, time_limit_s=time_limit_s, colors=colors,
                                 confidence=confidence)
+        if self.chainer is None or not lane.ok:
+            return lane
+        budget = DEFAULT_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
+        return self.chainer.chain(points, pose, lane, t0, budget,
+                                  int(self.model.params.max_windows), colors=colors)
 
 
 class _RldSidedMethod(_RldMethod):

@@ -5,6 +5,7 @@ rollback, closing); the steps, what is guaranteed and what is not: docs/incremen
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -35,6 +36,10 @@ POSE_JUMP_RAD = math.radians(45.0)
 #: reached the lane's end, so the solver restarts from the car. Chosen by measurement:
 #: docs/tuning.md#min_ahead.
 MIN_AHEAD = 6
+#: Why ``IncrementalRld.chain`` stops growing a lane inside one call: the next window would
+#: overrun the call's budget, ``LaneParams.max_windows`` windows solved, no consistent
+#: frontier after the rollbacks, a step added no cone, or the lane closed.
+CHAIN_STOPS = ("time budget", "window limit", "no frontier", "no growth", "closed")
 #: The frontier program's stats an extend call passes on in ``lane.stats["frontier"]``.
 FRONTIER_STATS = ("n_cones_used", "n_cols", "n_rows", "solve_time_s", "backend", "objective")
 
@@ -109,15 +114,27 @@ class IncrementalRld:
             return None
         return out[0], out[1]
 
-    def _extend(self, points, L, R, time_limit_s):
+    def _extend(self, points, L, R, time_limit_s, deadline=None, keep_junction=False):
         """One frontier solve with ``back`` cones released per side, rolled back as
         docs/incremental.md (step 3) says. Returns ((L, R) or None, rollbacks, closes):
-        ``closes`` when both frontier paths ended on their own boundary's first cone."""
+        ``closes`` when both frontier paths ended on their own boundary's first cone.
+        ``deadline`` (a ``time.perf_counter()`` value): no attempt starts after it, and each
+        solve's budget ends at it. ``keep_junction``: a side too short to release ``back``
+        cones keeps its first two (``chain``: the car's window lane may be 4 cones a side)."""
+        tried = set()
         for attempt in range(self.max_rollbacks + 1):
+            if deadline is not None:
+                left_s = deadline - time.perf_counter()
+                if left_s <= 0:
+                    return None, attempt, False
+                time_limit_s = left_s if time_limit_s is None else min(time_limit_s, left_s)
             back = self.frontier_cones + 2 * attempt
-            kl, kr = L[: max(L.size - back, 0)], R[: max(R.size - back, 0)]
-            if kl.size < 2 or kr.size < 2:
+            floor = 2 if keep_junction else 0
+            kl = L[: max(L.size - back, min(floor, L.size))]
+            kr = R[: max(R.size - back, min(floor, R.size))]
+            if kl.size < 2 or kr.size < 2 or (kl.size, kr.size) in tried:
                 return None, attempt, False
+            tried.add((kl.size, kr.size))
             ql, al, qr, ar = int(kl[-2]), int(kl[-1]), int(kr[-2]), int(kr[-1])
             # Cones the frontier may use: the map minus the kept lane, plus the junction cones
             # and, for closing the loop (CLC IV-E), each boundary's first cone.
@@ -163,7 +180,7 @@ class IncrementalRld:
             newL, newR = np.concatenate([kl[:-2], fl]), np.concatenate([kr[:-2], fr])
             if not self._consistent(points, newL, newR, kl.size - 1, kr.size - 1, ends):
                 continue
-            self._last_frontier = lane.stats
+            self._last_frontier = dict(lane.stats, status=lane.status)
             closes = all(ends) and lane_is_feasible(points[newL], points[newR], self.params,
                                                     closed=True)
             return (newL, newR), attempt, closes
@@ -301,10 +318,11 @@ class IncrementalRld:
         n = max(int(self.frontier_max_cones) - junction.size, 0)
         return np.union1d(junction, cand[order[:n]])
 
-    def _start_index(self, points, pose, side) -> int:
+    def _start_index(self, points, pose, side, closed: bool | None = None) -> int:
         """Where the returned boundary starts: the cone nearest the car, or the next one (at
         most two steps on) while that lies behind the car, the protocol's convention for the
-        ground truth (docs/protocol.md, step 5)."""
+        ground truth (docs/protocol.md, step 5). ``closed``: default the kept lane's."""
+        closed = self.closed if closed is None else closed
         xy = points[side]
         j = int(np.argmin(np.hypot(*(xy - pose.xy).T)))
         for _ in range(2):
@@ -312,7 +330,7 @@ class IncrementalRld:
                 break
             if j + 1 < side.size:
                 j += 1
-            elif self.closed:
+            elif closed:
                 j = 0
             else:
                 break
@@ -334,6 +352,59 @@ class IncrementalRld:
             return Lane.not_found(points, "the kept lane lies behind the car", stats=stats)
         return Lane(cones=points, left=out[0], right=out[1], status=status,
                     closed=self.closed, message="incremental RLD", stats=stats)
+
+    # -- chained windows inside one call (method "rld") ---------------------------------
+
+    def chain(self, points: np.ndarray, pose: Pose, lane: Lane, t0: float, budget_s: float,
+              max_windows: int, colors: np.ndarray | None = None) -> Lane:
+        """The car's window lane ``lane`` grown by frontier steps (``_extend``) on this map
+        until a stop of ``CHAIN_STOPS``; the call began at ``t0`` (``time.perf_counter``) with
+        ``budget_s`` seconds. Stateless: ``solve``'s kept lane is not touched."""
+        L, R = lane.left, lane.right
+        self._colors = colors
+        deadline = t0 + budget_s
+        step_s = time.perf_counter() - t0  # the car's window: the first step estimate
+        windows, grown, closed = 1, 0, False
+        optimal = lane.status is LaneStatus.OPTIMAL
+        while True:
+            if windows >= max_windows:
+                stop = "window limit"
+                break
+            now = time.perf_counter()
+            if now + step_s > deadline:  # the next step would likely end after the budget
+                stop = "time budget"
+                break
+            self._last_frontier = {}
+            new, _, closes = self._extend(points, L, R, None, deadline, keep_junction=True)
+            windows += 1
+            step_s = max(step_s, time.perf_counter() - now)
+            if new is None:
+                stop = "time budget" if time.perf_counter() >= deadline else "no frontier"
+                break
+            if not closes and new[0].size + new[1].size <= L.size + R.size:
+                stop = "no growth"
+                break
+            L, R = new
+            grown += 1
+            optimal &= self._last_frontier.get("status") is LaneStatus.OPTIMAL
+            if closes:
+                closed, stop = True, "closed"
+                break
+        stats = dict(lane.stats)
+        stats["chain"] = {"windows": windows, "steps": grown, "stop": stop,
+                          "added_cones": int(L.size + R.size - lane.left.size
+                                             - lane.right.size)}
+        if not grown:
+            return Lane(cones=points, left=L, right=R, status=lane.status,
+                        message=lane.message, cost=lane.cost, stats=stats)
+        if closed:  # a loop: each side from the car, as rld-incremental returns it
+            L, R = (np.roll(S, -self._start_index(points, pose, S, closed=True)) for S in (L, R))
+        # OPTIMAL: every window's program proven optimal (not the chained lane as a whole).
+        return Lane(cones=points, left=L, right=R,
+                    status=LaneStatus.OPTIMAL if optimal else LaneStatus.FEASIBLE,
+                    closed=closed, message=lane.message,
+                    cost=lane_cost(points, L, R, pose, self.params, closed=closed, colors=colors),
+                    stats=stats)
 
     # -- the call ------------------------------------------------------------------------
 

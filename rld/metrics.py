@@ -707,9 +707,10 @@ def side_agreement(a: np.ndarray, b: np.ndarray) -> int:
 
 def lanes_agree(lane_a, lane_b, min_common: int = 2) -> bool:
     """Whether two ``Lane``\\ s (or ``(left, right)`` index pairs; ``None`` for no lane) on the
-    same map give the same boundaries over their common horizon (``side_agreement``), with at
-    least ``min_common`` shared cones on each side. Two methods that both find no lane agree;
-    one lane against none does not."""
+    same map give the same boundaries over their common horizon (``side_agreement``; a closed
+    lane's boundaries as loops, ``_closed_agreement``), with at least ``min_common`` shared
+    cones on each side. Two methods that both find no lane agree; one lane against none does
+    not."""
     def sides(lane):
         if lane is None or (hasattr(lane, "ok") and not lane.ok):
             return None
@@ -720,4 +721,25 @@ def lanes_agree(lane_a, lane_b, min_common: int = 2) -> bool:
     sa, sb = sides(lane_a), sides(lane_b)
     if sa is None or sb is None:
         return sa is None and sb is None
-    return all(side_agreement(x, y) >= min_common for x, y in zip(sa, sb, strict=True))
+    ca, cb = (bool(getattr(lane, "closed", False)) for lane in (lane_a, lane_b))
+    return all(_closed_agreement(x, y, ca, cb) >= min_common
+               for x, y in zip(sa, sb, strict=True))
+
+
+def _closed_agreement(a: np.ndarray, b: np.ndarray, closed_a: bool, closed_b: bool) -> int:
+    """``side_agreement`` where a boundary may be a loop: two loops agree (their length) when
+    their edge sets are equal; a loop against an open boundary is read from the open one's
+    first cone (where it starts is the method's convention, not a disagreement)."""
+    a = [int(v) for v in np.asarray(a).ravel()]
+    b = [int(v) for v in np.asarray(b).ravel()]
+    if closed_a and closed_b:
+        def edges(s):
+            return {tuple(sorted(e)) for e in zip(s, s[1:] + s[:1], strict=True)}
+        return len(a) if a and edges(a) == edges(b) else -1
+    if closed_a and b and b[0] in a:
+        i = a.index(b[0])
+        a = a[i:] + a[:i]
+    elif closed_b and a and a[0] in b:
+        i = b.index(a[0])
+        b = b[i:] + b[:i]
+    return side_agreement(np.array(a, dtype=np.int64), np.array(b, dtype=np.int64))

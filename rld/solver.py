@@ -19,7 +19,9 @@ previous cone is matched to the nearest new window cone within 0.5 m (SLAM maps 
 and the previous edges that survive become the backend's hint (a CP-SAT hint, a HiGHS MIP start).
 
 Window rule: cones not more than ``window_behind_m`` behind the car (measured along its heading,
-so the cones beside it stay in), sorted by distance to the car, the first ``max_cones``.
+so the cones beside it stay in), sorted by distance to the car, the first ``max_cones``. Method
+``rld`` then chains further windows on this lane's end (``LaneParams.max_windows``,
+``rld.incremental.IncrementalRld.chain``; docs/formulation.md).
 """
 
 from __future__ import annotations

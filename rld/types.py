@@ -252,6 +252,10 @@ class LaneParams:
     max_cones: int = 20
     """How many map cones, nearest ahead of the car, RLD's program takes (the paper's n; it uses
     12, section IV-A). Source: our first choice."""
+    max_windows: int = 30
+    """Most cone windows one ``rld`` call solves: the car's, then frontier windows chained on
+    its lane's end (``rld.incremental.IncrementalRld.chain``) while the call's time budget
+    lasts; 1 is the paper's single window. Chosen by measurement: docs/tuning.md#max_windows."""
     duplicate_radius_m: float = 0.3
     """Cones at most this far apart, metres centre to centre, are one cone, merged before any
     method runs (``rld.dedup``); 0 turns merging off. Source: the rules (a small cone's base is
@@ -275,6 +279,8 @@ class LaneParams:
             raise ValueError("LaneParams.start_pairs must be at least 1")
         if int(self.max_cones) < 4:
             raise ValueError("LaneParams.max_cones must be at least 4")
+        if int(self.max_windows) < 1:
+            raise ValueError("LaneParams.max_windows must be at least 1")
         if self.regularity_tolerance <= 1.0:
             raise ValueError("LaneParams.regularity_tolerance must be above 1 (a length ratio)")
 

@@ -3,8 +3,8 @@
 On generated tracks without false positives and on the shared dataset tracks with none added,
 at every k-th pose of the protocol (R = 50 m), ``solve_lane(..., method="rld")`` and
 ``solve_lane(..., method="clc")`` are compared over their common horizon
-(``rld.metrics.lanes_agree``: from the later of the two starts to the end of the shorter lane,
-which is RLD's cone window).
+(``rld.metrics.lanes_agree``: from the later of the two starts to the end of the shorter lane;
+a closed lane's boundaries as loops).
 
 What holds today, and what these tests assert:
 - Wherever both lanes follow the ground truth (strict categories ``gt``, ``near_gt`` or
@@ -15,13 +15,14 @@ What holds today, and what these tests assert:
   method's own failure. Seen since 2026-12-01: CLC skipping a kinked cone 23 m ahead that
   RLD's objective, on CLC's longer lane, also prefers to skip.)
 - The two methods do not yet agree at every pose: where they differ, one of them (or both)
-  diverges from the ground truth (each method's own failures, docs/results.md). The agreement
-  rate is held to a floor a little under what was measured (generated tracks 102 of 116 poses,
-  dataset tracks 67 of 72, 2026-11-25, RLD with theta_t = 0.7 rad; generated tracks 102 of
-  105 since 2026-12-02, when a fix to ``segments_intersect`` for distant collinear segments
-  changed the track of seed 103), so that a regression in
-  either method, or in the conventions they share, fails here with the poses and a picture of
-  each disagreement.
+  diverges from the ground truth (each method's own failures, docs/results.md), and RLD never
+  alone. Since RLD chains its windows (``LaneParams.max_windows``, 2026-12-07) the common
+  horizon is the whole lane, not RLD's 20-cone window, and agreement fell to 73 of 105
+  (generated; 95 of 105 with the single window, issue 40) and 39 of 72 (dataset): of the 65
+  disagreements, CLC alone diverges in 52 (past 20 m in all but one), both diverge in 12,
+  and in one RLD's loop is the truth while CLC's skips a cone at its seam. The floors
+  sit at most 2 points under those figures, so that a regression in either method, or in the
+  conventions they share, fails here with the poses and a picture of each disagreement.
 """
 
 from __future__ import annotations
@@ -46,7 +47,8 @@ FOLLOWS_TRUTH = ("gt", "near_gt", "too_short")
 def _compare(tracks, every: int, folder: Path) -> tuple[int, list[str], list[str]]:
     """Solve every ``every``-th pose with both methods; returns (poses, disagreements,
     contradictions), each a line naming the pose, with a plot path for disagreements.
-    A contradiction: both lanes follow the truth, yet they differ."""
+    A contradiction: both lanes follow the truth, yet they differ; or RLD alone strays (no
+    lane, or it diverges from the truth where CLC does not)."""
     from rld.plotting import plot_scene
 
     n, disagree, contradict = 0, [], []
@@ -74,9 +76,15 @@ def _compare(tracks, every: int, folder: Path) -> tuple[int, list[str], list[str
             line = (f"{track.name} pose {k}: rld {cats['rld']}, clc {cats['clc']} "
                     f"(plot: {path})")
             disagree.append(line)
-            if all(lanes[m].ok and cats[m] in FOLLOWS_TRUTH
-                   and math.isinf(scores[m].divergence_m) for m in lanes):
+            # A lane exactly the truth (gt) against one that differs: the other's own miss
+            # (CLC skipping a true cone at a closed loop's seam, say), not a convention.
+            if "gt" not in cats.values() and all(
+                    lanes[m].ok and cats[m] in FOLLOWS_TRUTH
+                    and math.isinf(scores[m].divergence_m) for m in lanes):
                 contradict.append(line)
+            ok = {m: lanes[m].ok and math.isinf(scores[m].divergence_m) for m in lanes}
+            if ok["clc"] and not ok["rld"]:
+                contradict.append("rld alone: " + line)
     return n, disagree, contradict
 
 
@@ -94,14 +102,14 @@ def test_rld_and_clc_agree_on_clean_generated_tracks(tmp_path):
     tracks = [generate_track(100 + s) for s in range(4)]
     n, disagree, contradict = _compare(tracks, every=10, folder=tmp_path)
     assert n == 105
-    _check(n, disagree, contradict, floor=0.85)
+    _check(n, disagree, contradict, floor=0.67)
 
 
 def test_rld_and_clc_agree_on_the_dataset_tracks(dataset_dir, tmp_path):
     tracks = [load_dataset_track(dataset_dir, k) for k in (1, 2, 3, 4, 6, 7)]
     n, disagree, contradict = _compare(tracks, every=20, folder=tmp_path)
     assert n == 72
-    _check(n, disagree, contradict, floor=0.83)
+    _check(n, disagree, contradict, floor=0.53)
 
 
 @pytest.mark.parametrize("swap", ["sides", "order"])

@@ -1203,3 +1203,28 @@ def test_geometric_side_deviation_against_dense_sampling(pred, ref, car):
     # distance to a polyline is 1-Lipschitz, so ours is at most 0.125 m below it, and above it
     # by at most the brute force's errors at the cut (its step, and s0 to 5 mm).
     assert want - GEOMETRIC_STEP_M / 2 - 1e-6 <= got <= want + 0.01 + 1e-6
+
+
+def _lane(left, right, closed):
+    from rld.types import Lane, LaneStatus
+
+    cones = np.zeros((10, 2))
+    return Lane(cones=cones, left=np.array(left), right=np.array(right),
+                status=LaneStatus.OPTIMAL, closed=closed)
+
+
+@pytest.mark.parametrize(
+    ("a", "closed_a", "b", "closed_b", "agree"),
+    [
+        ([0, 1, 2, 3], True, [3, 0, 1, 2], True, True),  # one loop, started elsewhere
+        ([0, 1, 2, 3], True, [0, 1, 3, 2], True, False),  # same cones, other edges
+        ([0, 1, 2, 3], True, [2, 3, 0], False, True),  # an open boundary along the loop
+        ([0, 1, 2, 3], True, [2, 3, 1], False, False),  # it leaves the loop
+        ([0, 1, 2, 3], True, [3, 0, 1], False, True),  # read across the loop's seam
+    ],
+)
+def test_lanes_agree_reads_closed_boundaries_as_loops(a, closed_a, b, closed_b, agree):
+    right = [5, 6, 7]  # the same on both, open, unless both lanes are closed
+    la, lb = _lane(a, right, closed_a), _lane(b, right, closed_b)
+    assert lanes_agree(la, lb) is agree
+    assert lanes_agree(lb, la) is agree

@@ -335,8 +335,11 @@ def test_rld_lane_meets_the_shared_constraints():
         # simplicity, which both share.
         for xy in (L, R):
             assert np.all(np.hypot(*np.diff(xy, axis=0).T) <= PARAMS.max_cone_spacing_m)
+        # The cost of the lane returned: a loop with its closing edges (a chained lane can
+        # close, LaneParams.max_windows).
         assert lane.cost == pytest.approx(costs.lane_cost(f.cones, lane.left, lane.right,
-                                                          f.pose, PARAMS), abs=1e-6)
+                                                          f.pose, PARAMS, closed=lane.closed),
+                                          abs=1e-6)
 
 
 @pytest.mark.parametrize("sided", [False, True], ids=["paper", "sided"])

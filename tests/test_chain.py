@@ -1,0 +1,163 @@
+"""Chained windows inside one ``rld`` call (``LaneParams.max_windows``,
+``rld.incremental.IncrementalRld.chain``): hand-built tracks whose whole lane is known."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+from rld.api import LaneSolver, solve_lane
+from rld.solver import RldModel
+from rld.types import LaneParams, LaneStatus, Pose
+
+SPACING_M = 3.5
+CAR = Pose(0.0, 0.0, 0.0)
+CHAINED = LaneParams(max_windows=30)
+
+
+def straight(length_m: float = 150.0, half_width_m: float = 2.0) -> tuple[np.ndarray, int]:
+    """Two parallel boundaries along +x from x = 0.5 m, a cone every 3.5 m: left cones first
+    (y = +half_width_m), then the right ones; returns (cones, cones per side)."""
+    x = np.arange(0.5, length_m, SPACING_M)
+    left = np.column_stack([x, np.full(x.size, half_width_m)])
+    right = np.column_stack([x, np.full(x.size, -half_width_m)])
+    return np.vstack([left, right]), x.size
+
+
+def bend(radius_m: float = 30.0, sweep_rad: float = 1.5 * math.pi,
+         half_width_m: float = 2.0) -> tuple[np.ndarray, int, int, Pose]:
+    """A left-hand arc about (0, radius_m) from the origin (the car, heading +x), then 30 m
+    straight on: boundaries at radius_m -/+ half_width_m, cones about 3.5 m apart along each.
+    Returns (cones: left then right, left count, right count, the car's pose)."""
+    sides = []
+    for r in (radius_m - half_width_m, radius_m + half_width_m):
+        n = int(round(r * sweep_rad / SPACING_M))
+        t = np.linspace(0.0, sweep_rad, n + 1)[:-1] + 0.5 / r  # the first cone 0.5 m ahead
+        arc = np.column_stack([r * np.sin(t), radius_m - r * np.cos(t)])
+        # Straight on from the last arc cone along its tangent, at the arc's spacing.
+        tangent = np.array([math.cos(t[-1]), math.sin(t[-1])])
+        step = r * (t[1] - t[0])
+        on = arc[-1] + np.outer(np.arange(1, int(30.0 / step) + 1) * step, tangent)
+        sides.append(np.vstack([arc, on]))
+    return np.vstack(sides), len(sides[0]), len(sides[1]), CAR
+
+
+def test_the_chained_lane_is_the_whole_straight_cone_for_cone():
+    cones, n = straight()
+    lane = solve_lane(cones, CAR, params=CHAINED, time_limit_s=5.0)
+    assert lane.ok and not lane.closed
+    np.testing.assert_array_equal(lane.left, np.arange(n))
+    np.testing.assert_array_equal(lane.right, np.arange(n, 2 * n))
+    assert lane.stats["chain"]["stop"] in ("no growth", "no frontier")
+    assert lane.stats["chain"]["added_cones"] == 2 * n - 20  # beyond the car's window
+    # The car's window alone (the paper's RLD) sees its 20 nearest cones: 10 a side.
+    one = solve_lane(cones, CAR, params=LaneParams(max_windows=1), time_limit_s=5.0)
+    np.testing.assert_array_equal(one.left, np.arange(10))
+    np.testing.assert_array_equal(one.right, np.arange(n, n + 10))
+    assert "chain" not in one.stats
+
+
+def test_a_car_window_of_four_cones_a_side_still_chains():
+    # Left cones 1.3 m apart, right 5.4 m: the car's 20-cone window holds 16 left and 4 right,
+    # fewer than the 3 released plus the 2 junction cones; the chain keeps the right side's
+    # first two and re-solves the rest, and reaches the end of both sides.
+    xl, xr = np.arange(0.5, 150.0, 1.3), np.arange(0.5, 150.0, 5.4)
+    cones = np.vstack([np.column_stack([xl, np.full(xl.size, 2.0)]),
+                       np.column_stack([xr, np.full(xr.size, -2.0)])])
+    one = solve_lane(cones, CAR, params=LaneParams(max_windows=1), time_limit_s=5.0)
+    assert (one.left.size, one.right.size) == (16, 4)
+    lane = solve_lane(cones, CAR, params=CHAINED, time_limit_s=10.0)
+    np.testing.assert_array_equal(lane.left, np.arange(xl.size))
+    np.testing.assert_array_equal(lane.right, np.arange(xl.size, xl.size + xr.size))
+
+
+def test_the_chained_lane_is_the_whole_bend_cone_for_cone():
+    cones, nl, nr, pose = bend()
+    lane = solve_lane(cones, pose, params=CHAINED, time_limit_s=5.0)
+    assert lane.ok
+    np.testing.assert_array_equal(lane.left, np.arange(nl))
+    np.testing.assert_array_equal(lane.right, np.arange(nl, nl + nr))
+
+
+def test_a_ring_closes_into_the_whole_loop():
+    # Two concentric circles about (0, 27): the car at the origin heading +x, inner ring left.
+    sides = []
+    for r in (25.0, 29.0):
+        n = int(round(2 * math.pi * r / SPACING_M))
+        t = np.arange(n) * 2 * math.pi / n + 0.5 / r
+        sides.append(np.column_stack([r * np.sin(t), 27.0 - r * np.cos(t)]))
+    cones = np.vstack(sides)
+    nl = len(sides[0])
+    lane = solve_lane(cones, CAR, params=CHAINED, time_limit_s=5.0)
+    assert lane.ok and lane.closed and lane.stats["chain"]["stop"] == "closed"
+    # Each side is its whole ring, in order, from the cone nearest the car.
+    np.testing.assert_array_equal(lane.left, np.arange(nl))
+    np.testing.assert_array_equal(lane.right, np.arange(nl, cones.shape[0]))
+
+
+def test_max_windows_one_is_the_car_window_model_itself():
+    cones, _ = straight(60.0)
+    lane = solve_lane(cones, CAR, params=LaneParams(max_windows=1), time_limit_s=5.0)
+    own = RldModel(LaneParams()).solve(cones, CAR, time_limit_s=5.0)
+    np.testing.assert_array_equal(lane.left, own.left)
+    np.testing.assert_array_equal(lane.right, own.right)
+    assert lane.status is own.status and lane.cost == own.cost
+
+
+def test_the_window_limit_stops_the_chain():
+    cones, n = straight()
+    lane = solve_lane(cones, CAR, params=LaneParams(max_windows=3), time_limit_s=5.0)
+    chain = lane.stats["chain"]
+    assert chain["stop"] == "window limit" and chain["windows"] == 3
+    assert 20 < lane.left.size + lane.right.size < 2 * n
+    np.testing.assert_array_equal(lane.left, np.arange(lane.left.size))  # a prefix of the truth
+
+
+def test_the_time_budget_stops_the_chain_and_is_honoured():
+    cones, n = straight(400.0)
+    solver = LaneSolver("rld", params=LaneParams(max_windows=1000))
+    solver.solve(cones, CAR, time_limit_s=5.0)  # set-up and compilation apart
+    budget = 0.08
+    t0 = time.perf_counter()
+    lane = solver.solve(cones, CAR, time_limit_s=budget)
+    elapsed = time.perf_counter() - t0
+    assert lane.ok and lane.stats["chain"]["stop"] == "time budget"
+    assert lane.left.size < n  # 114 cones a side: more windows than the budget holds
+    # The next window starts only when the longest so far still fits: at most the model
+    # update and extraction of one window over (a generous margin for a loaded machine).
+    assert elapsed < budget + 0.05
+
+
+@pytest.mark.parametrize("bad", [
+    np.array([[0.0, 1.0], [np.nan, 2.0], [3.0, 1.0], [3.0, -1.0]]),
+    np.zeros((3, 2)),
+    np.zeros((5, 3)),
+])
+def test_bad_input_is_refused_as_before(bad):
+    for w in (1, 30):
+        with pytest.raises(ValueError):
+            solve_lane(bad, CAR, params=LaneParams(max_windows=w))
+
+
+def test_no_lane_is_reported_as_by_the_single_window():
+    cones, _ = straight(60.0)
+    far = cones + np.array([40.0, 0.0])  # no cone within near_radius_m or start_reach_m
+    lanes = [solve_lane(far, CAR, params=LaneParams(max_windows=w)) for w in (1, 30)]
+    assert all(not lane.ok for lane in lanes)
+    assert lanes[0].status is lanes[1].status is LaneStatus.NOT_FOUND
+    assert lanes[0].message == lanes[1].message
+
+
+def test_the_default_rld_is_chained():
+    cones, n = straight()
+    lane = solve_lane(cones, CAR, time_limit_s=5.0)
+    assert LaneParams().max_windows == CHAINED.max_windows
+    np.testing.assert_array_equal(lane.left, np.arange(n))
+
+
+def test_max_windows_below_one_is_refused():
+    with pytest.raises(ValueError, match="max_windows"):
+        LaneParams(max_windows=0)
