@@ -38,8 +38,10 @@ POSE_JUMP_RAD = math.radians(45.0)
 MIN_AHEAD = 6
 #: Why ``IncrementalRld.chain`` stops growing a lane inside one call: the next window would
 #: overrun the call's budget, ``LaneParams.max_windows`` windows solved, no consistent
-#: frontier after the rollbacks, a step added no cone, or the lane closed.
-CHAIN_STOPS = ("time budget", "window limit", "no frontier", "no growth", "closed")
+#: frontier after the rollbacks, a step added no cone, the lane closed, or the grown lane fails
+#: the shared predicate (``lane_is_feasible`` less w_max, as ``rld.solver`` checks a window's).
+CHAIN_STOPS = ("time budget", "window limit", "no frontier", "no growth", "closed",
+               "infeasible step")
 #: The frontier program's stats an extend call passes on in ``lane.stats["frontier"]``.
 FRONTIER_STATS = ("n_cones_used", "n_cols", "n_rows", "solve_time_s", "backend", "objective")
 
@@ -384,6 +386,10 @@ class IncrementalRld:
             if not closes and new[0].size + new[1].size <= L.size + R.size:
                 stop = "no growth"
                 break
+            if not lane_is_feasible(points[new[0]], points[new[1]], self.params,
+                                    closed=closes, max_width=False):
+                stop = "infeasible step"  # the lane so far stands: rld returns no lane the
+                break  # shared predicate rejects
             L, R = new
             grown += 1
             optimal &= self._last_frontier.get("status") is LaneStatus.OPTIMAL
