@@ -9,10 +9,11 @@ is set), one with 0 with it off.
     python -m benchmarks.bench_color_weights --set choosing --every 32 --generated 4 \\
         --accuracies 0.95,0.8 --weights 0.5:1:2,0:0:2,0.25:0:0 --out colour_weights
 
-A setting is ``nvd:rank:w_color``. Writes ``<out>/<setting>_A<acc>.json`` (every pose; skipped
-when present, so a run can be resumed or extended) and prints, per setting and accuracy, the
-pooled rates > 1 m / > 0.5 m (%), the mean lane length (% of the true), and the poses where
-the setting is critical at 0.5 m and colourless is not, and the reverse.
+A setting is ``nvd:rank:w_color`` or ``nvd:rank:w_color:color_unknown``; ``--windows 1`` runs
+every setting (and colourless) with ``max_windows=1``. Writes ``<out>/<setting>_A<acc>.json``
+(every pose; skipped when present, so a run can be resumed or extended) and prints, per setting
+and accuracy, the pooled rates > 1 m / > 0.5 m (%), the mean lane length (% of the true), and
+the poses where the setting is critical at 0.5 m and colourless is not, and the reverse.
 """
 
 from __future__ import annotations
@@ -28,16 +29,19 @@ import numpy as np
 from benchmarks import bench_color as bc
 
 
-def setting_name(nvd: float, rank: float, judge: float) -> str:
-    return f"n{nvd:g}_r{rank:g}_j{judge:g}"
+def setting_name(nvd: float, rank: float, judge: float, unknown: float | None = None) -> str:
+    base = f"n{nvd:g}_r{rank:g}_j{judge:g}"
+    return base if unknown is None else f"{base}_u{unknown:g}"
 
 
-def parse_setting(text: str) -> tuple[float, float, float]:
-    """``"0.25:0.5:2"`` -> (0.25, 0.5, 2.0): nvd_color_weight, rank_color_weight, w_color."""
+def parse_setting(text: str) -> tuple[float, float, float, float | None]:
+    """``"0.25:0.5:2"`` -> (0.25, 0.5, 2.0, None): nvd_color_weight, rank_color_weight,
+    w_color, and ``color_unknown`` when a fourth value is given (None: the default)."""
     parts = [float(v) for v in text.split(":")]
-    if len(parts) != 3 or any(v < 0 or not math.isfinite(v) for v in parts):
-        raise ValueError(f"a setting is nvd:rank:w_color, three weights >= 0; got {text!r}")
-    return parts[0], parts[1], parts[2]
+    if len(parts) not in (3, 4) or any(v < 0 or not math.isfinite(v) for v in parts):
+        raise ValueError(f"a setting is nvd:rank:w_color[:color_unknown], weights >= 0; "
+                         f"got {text!r}")
+    return parts[0], parts[1], parts[2], (parts[3] if len(parts) == 4 else None)
 
 
 def _key(r: dict) -> tuple:
@@ -107,6 +111,9 @@ def main(argv=None) -> None:
     ap.add_argument("--generated", type=int, default=4)
     ap.add_argument("--processes", type=int, default=None)
     ap.add_argument("--out", default="colour_weights")
+    ap.add_argument("--windows", type=int, default=None,
+                    help="LaneParams.max_windows for every run, colourless too (rld's chain; "
+                         "1: one window, cheaper to choose on)")
     a = ap.parse_args(argv)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -132,17 +139,21 @@ def main(argv=None) -> None:
         path.write_text(json.dumps(recs))
         return recs
 
-    base = load_or_run(out / "colourless.json", None, None)
-    lines = ["| setting (nvd, rank, w_color) | A | poses | > 1 m % | > 0.5 m % | length % | "
+    default = LaneParams() if a.windows is None else LaneParams(max_windows=a.windows)
+    base = load_or_run(out / "colourless.json", None, None if a.windows is None else default)
+    lines = ["| setting (nvd, rank, w_color[, unknown]) | A | poses | > 1 m % | > 0.5 m % | "
+             "length % | "
              "0.5 m vs colourless: worse / better poses | difference at 0.5 m, % points "
              "[95 % lap-bootstrap interval] |", "|---|---|---|---|---|---|---|---|",
              summary_row("colourless", None, base, None)]
     print(lines[-1], flush=True)
     for acc in accs:
-        for nvd, rank, judge in settings:
-            params = dataclasses.replace(LaneParams(), nvd_color_weight=nvd,
-                                         rank_color_weight=rank, w_color=judge)
-            name = setting_name(nvd, rank, judge)
+        for nvd, rank, judge, unknown in settings:
+            params = dataclasses.replace(default, nvd_color_weight=nvd, rank_color_weight=rank,
+                                         w_color=judge)
+            if unknown is not None:
+                params = dataclasses.replace(params, color_unknown=unknown)
+            name = setting_name(nvd, rank, judge, unknown)
             recs = load_or_run(out / f"{name}_A{acc:g}.json", acc, params)
             lines.append(summary_row(name, acc, recs, base))
             print(lines[-1], flush=True)

@@ -151,7 +151,8 @@ class ClcModel:
             return s
         return s - w * lane_color_costs(points, self._colors, candidates, pose,
                                         self.refine.reach_m, share=True,
-                                        near_radius_m=self.params.near_radius_m)
+                                        near_radius_m=self.params.near_radius_m,
+                                        unknown=self.params.color_unknown)
 
     def solve(self, points: np.ndarray, pose: Pose, colors=None, time_limit_s=None,
               confidence=None) -> Lane:
@@ -184,7 +185,7 @@ class ClcModel:
             fallbacks, iterations = fallbacks + 1, iterations + nxt.iterations
             if nxt.candidates:
                 res, chosen = nxt, rank
-        stats.update(start_fallbacks=fallbacks, complete=res.complete,
+        stats.update(start_fallbacks=fallbacks, complete=res.complete, iterations=iterations,
                      n_candidates=len(res.candidates), n_cones_used=int(points.shape[0]))
         if confidence is not None:
             stats["note"] = "CLC does not use confidence (section III-A)"
@@ -195,13 +196,11 @@ class ClcModel:
                 "Refinement.judge_color off (docs/tuning.md#nvd_color_weight)")]))
         if res.start is None:
             self._prev = None
-            stats["iterations"] = iterations
             return Lane.not_found(points, f"no cone within {self.params.near_radius_m} m of the "
                                   "car on each side (CLC IV-C)", stats=stats)
         stats["start"] = res.start
         if not res.candidates:
             self._prev = None
-            stats["iterations"] = iterations
             return Lane.not_found(points, "no path pair from the start cones satisfies the "
                                   "lane constraints", stats=stats)
         scores = self._score(points, pose, res.candidates, res.features)

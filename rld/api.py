@@ -17,7 +17,14 @@ from typing import Any
 import numpy as np
 
 from rld.baselines import nearest_chain
-from rld.colors import parse_class_probs, parse_colors, side_labels, side_labels_from_probs
+from rld.colors import (
+    SIDE_LEFT,
+    SIDE_RIGHT,
+    parse_class_probs,
+    parse_colors,
+    side_labels,
+    side_labels_from_probs,
+)
 from rld.dedup import merge_duplicates
 from rld.types import MIN_CONES, Lane, LaneParams, Pose, as_cones, as_pose
 
@@ -78,10 +85,10 @@ class _RldMethod:
         if int(params.max_windows) > 1 and not self.sided:
             from rld.incremental import IncrementalRld
 
-            # Frontier windows of max_cones, or the least that holds the junction and more
-            # free cones than the 2 x 3 released (IncrementalRld's check).
+            # Frontier windows of max_cones, or the least that lets the lane grow.
+            least = IncrementalRld.least_frontier_cones()
             self.chainer = IncrementalRld(params, backend=backend,
-                                          frontier_max_cones=max(int(params.max_cones), 11))
+                                          frontier_max_cones=max(int(params.max_cones), least))
 
     def solve(self, points, pose, colors=None, time_limit_s=None, confidence=None) -> Lane:
         from rld.solver import DEFAULT_TIME_LIMIT_S
@@ -184,14 +191,18 @@ def _check_confidence(confidence: Any, n: int) -> np.ndarray | None:
 
 def _side_labels(colors: Any, class_probs: Any, n: int) -> np.ndarray | None:
     """The methods' per-cone side labels (``rld.colors``) from ``colors`` (class names or codes)
-    or ``class_probs`` ((n, 5) probabilities); None when neither is given."""
+    or ``class_probs`` ((n, 5) probabilities); None when neither is given or no cone's class
+    names a side (blue or yellow): then there is no colour evidence, and nothing to charge an
+    unknown cone against (``LaneParams.color_unknown``)."""
     if colors is not None and class_probs is not None:
         raise ValueError("give colors or class_probs, not both")
     if colors is not None:
-        return side_labels(parse_colors(colors, n))
-    if class_probs is not None:
-        return side_labels_from_probs(parse_class_probs(class_probs, n))
-    return None
+        labels = side_labels(parse_colors(colors, n))
+    elif class_probs is not None:
+        labels = side_labels_from_probs(parse_class_probs(class_probs, n))
+    else:
+        return None
+    return labels if np.any((labels == SIDE_LEFT) | (labels == SIDE_RIGHT)) else None
 
 
 class LaneSolver:
@@ -340,9 +351,10 @@ def solve_lane(
     backend. ``colors``: optional per-cone Formula Student classes (``blue``, ``yellow``,
     ``orange``, ``big_orange``, ``unknown``; ``left``/``right`` for blue/yellow) or their codes
     (0 unknown, 1 yellow, 2 blue, 3 orange, 4 big orange); or ``class_probs``, (N, 5)
-    probabilities in that order (``rld.colors``). Evidence, never a hard rule: a cost per cone
-    on the side its class contradicts (``rld.costs.color_cost``; ``LaneParams.w_color`` in RLD
-    and its incremental form), a preference in the nearest-neighbour chain; CLC's uses
+    probabilities in that order (``rld.colors``). Evidence, never a hard rule: a cost for a
+    cone on the side its class contradicts and for an unknown one (``rld.costs.
+    boundary_color_cost``; ``LaneParams.w_color`` and ``color_unknown`` in RLD and its
+    incremental form), a preference in the nearest-neighbour chain; CLC's uses
     (``nvd_color_weight``, ``rank_color_weight``, ``clc.refine.Refinement.judge_color``) are off by
     default (docs/tuning.md#nvd_color_weight); the fitted baseline (``huang``) ignores it.
     ``confidence``: optional per-cone detection confidence in [0, 1], a cost for RLD

@@ -8,8 +8,11 @@ orange and big orange belong to either boundary and, like ``unknown``, say nothi
 side. The integer codes are those of the public planner teams use (0 unknown, 1 yellow, 2 blue,
 3 orange, 4 big orange); ``left`` and ``right`` are kept as aliases of blue and yellow.
 
-The methods receive side labels (``SIDE_UNKNOWN``, ``SIDE_LEFT``, ``SIDE_RIGHT``; ``side_labels``):
-colour is evidence, a cost, never a hard rule.
+The methods receive side labels (``side_labels``): ``SIDE_LEFT`` (blue), ``SIDE_RIGHT``
+(yellow), ``SIDE_EITHER`` (orange, big orange: a cone of either boundary) and ``SIDE_UNKNOWN``
+(perception could not tell). Colour is evidence, a cost, never a hard rule: a boundary pays for
+joining the two sides' classes and for every cone perception could not classify
+(``rld.costs.boundary_color_cost``); an orange cone pays for neither.
 """
 
 from __future__ import annotations
@@ -18,16 +21,17 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CLASSES", "ALIASES", "SIDE_UNKNOWN", "SIDE_LEFT", "SIDE_RIGHT", "parse_colors",
+__all__ = ["CLASSES", "ALIASES", "SIDE_UNKNOWN", "SIDE_LEFT", "SIDE_RIGHT", "SIDE_EITHER",
+           "parse_colors",
            "parse_class_probs", "side_labels", "side_labels_from_probs", "PROB_SUM_TOLERANCE"]
 
 #: Class names by integer code (the public planner's numbering), the columns of ``class_probs``.
 CLASSES = ("unknown", "yellow", "blue", "orange", "big_orange")
 #: Other accepted names: the package's earlier side labels.
 ALIASES = {"left": "blue", "right": "yellow"}
-SIDE_UNKNOWN, SIDE_LEFT, SIDE_RIGHT = 0, 1, 2
-#: The side each class speaks for, by class code: blue left, yellow right, the others neither.
-_SIDE_OF_CLASS = np.array([SIDE_UNKNOWN, SIDE_RIGHT, SIDE_LEFT, SIDE_UNKNOWN, SIDE_UNKNOWN])
+SIDE_UNKNOWN, SIDE_LEFT, SIDE_RIGHT, SIDE_EITHER = 0, 1, 2, 3
+#: The side each class speaks for, by class code: blue left, yellow right, orange either.
+_SIDE_OF_CLASS = np.array([SIDE_UNKNOWN, SIDE_RIGHT, SIDE_LEFT, SIDE_EITHER, SIDE_EITHER])
 #: How far (absolute) a row of ``class_probs`` may sum from 1.
 PROB_SUM_TOLERANCE = 1e-6
 _CODES = {name: k for k, name in enumerate(CLASSES)} | {a: CLASSES.index(c)
@@ -79,15 +83,19 @@ def parse_class_probs(probs: Any, n: int) -> np.ndarray:
 
 
 def side_labels(codes: np.ndarray) -> np.ndarray:
-    """The side each class code speaks for (``SIDE_*``, int64): blue left, yellow right."""
+    """The side each class code speaks for (``SIDE_*``, int64): blue left, yellow right,
+    orange and big orange either, unknown unknown."""
     return _SIDE_OF_CLASS[np.asarray(codes, dtype=np.int64)]
 
 
 def side_labels_from_probs(probs: np.ndarray) -> np.ndarray:
     """Side labels from class probabilities: left where blue has more than half the mass, right
-    where yellow has, else unknown (until the methods weigh probabilities themselves)."""
+    where yellow has, either where the two oranges together have, else unknown (until the
+    methods weigh probabilities themselves)."""
     probs = np.asarray(probs, dtype=np.float64)
     out = np.full(probs.shape[0], SIDE_UNKNOWN, dtype=np.int64)
     out[probs[:, CLASSES.index("blue")] > 0.5] = SIDE_LEFT
     out[probs[:, CLASSES.index("yellow")] > 0.5] = SIDE_RIGHT
+    out[probs[:, CLASSES.index("orange")] + probs[:, CLASSES.index("big_orange")] > 0.5] = \
+        SIDE_EITHER
     return out

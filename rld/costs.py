@@ -13,7 +13,7 @@ import numpy as np
 
 from rld import costs_kernels as ck
 from rld import geometry as geo
-from rld.colors import SIDE_LEFT, SIDE_RIGHT
+from rld.colors import SIDE_LEFT, SIDE_RIGHT, SIDE_UNKNOWN
 from rld.constraints import lane_widths
 from rld.types import LaneParams, Pose
 
@@ -35,6 +35,7 @@ __all__ = [
     "color_edge_cost",
     "color_skip_cost",
     "color_start_cost",
+    "color_unknown_cost",
     "lane_color_costs",
     "confidence_cost",
     "ranking_features",
@@ -176,8 +177,8 @@ def edge_objective(
 
 def color_cost(colors: np.ndarray, side: int) -> np.ndarray:
     """Whether each cone's side label (``colors``, ``rld.colors``) contradicts ``side``
-    (``SIDE_LEFT`` or ``SIDE_RIGHT``), (N,) floats 1 or 0; unknown, orange and big orange
-    never do. The indicator the colour costs are made of: ``boundary_color_cost`` (RLD's
+    (``SIDE_LEFT`` or ``SIDE_RIGHT``), (N,) floats 1 or 0; unknown and either (orange, big
+    orange) never do. The indicator the colour costs are made of: ``boundary_color_cost`` (RLD's
     objective, CLC's judge and ranking), CLC's next-vertex decider
     (``clc.search.color_penalties``), the nearest-neighbour chain."""
     if side not in (SIDE_LEFT, SIDE_RIGHT):
@@ -187,43 +188,39 @@ def color_cost(colors: np.ndarray, side: int) -> np.ndarray:
 
 
 def boundary_color_cost(points: np.ndarray, colors: np.ndarray, idx: np.ndarray, pose: Pose,
-                        near_radius_m: float, closed: bool = False) -> float:
-    """The colour cost of one boundary (ours; RLD section V names colour as future work),
-    unweighted: for the boundary ``idx`` (indices into ``points`` and ``colors``, side labels),
-    1/2 for every edge whose cones' labels name different sides, 1/2 for every three
-    consecutive cones whose middle one has no side label and whose outer ones name different
-    sides, and 1/2 for every end of an open boundary within ``near_radius_m`` of the car whose
-    label contradicts the side of the car it lies on (``color_cost``); 0 for fewer than two
-    cones. So a cone of the other side's class among its own costs 1 wherever it stands in the
-    boundary (two edges, or its edge and the start), as 1 per contradicting cone would; a run
-    of them costs 1 at each change of class. Why not 1 per cone on its wrong side: the paper's
-    program (eqs 1-29) does not know which path is left, and the side columns that would tell
-    it cost too much time (docs/formulation.md, "Colour"); so every RLD form, CLC's judge and
-    its ranking pay this one, linear in the edge (a), angle (f, eq. 21) and endpoint (m, eq.
-    10) variables. With every label swapped it charges each lane through the true cones alike
-    (1/2 a start). ``costs_kernels.boundary_color``."""
+                        near_radius_m: float, closed: bool = False,
+                        unknown: float = 0.0) -> float:
+    """The colour cost of one boundary ``idx`` (side labels ``colors``; ours, RLD section V),
+    unweighted: 1/2 per edge joining the two sides' labels, per unlabelled cone between them
+    and per near end on the car's other side, plus ``unknown`` per unknown cone
+    (docs/formulation.md, "Colour"; ``costs_kernels.boundary_color``)."""
     h = pose.heading
     return float(ck.boundary_color(np.ascontiguousarray(points, dtype=np.float64),
                                    np.ascontiguousarray(colors, dtype=np.int64),
                                    np.ascontiguousarray(idx, dtype=np.int64), bool(closed),
                                    float(pose.xy[0]), float(pose.xy[1]), float(h[0]),
-                                   float(h[1]), float(near_radius_m)))
+                                   float(h[1]), float(near_radius_m), float(unknown)))
 
 
 def color_edge_cost(colors: np.ndarray, edges: np.ndarray) -> np.ndarray:
     """``boundary_color_cost``'s edge term for each edge (E, 2): 1/2 where its two cones'
     labels name different sides, else 0 (RLD's program puts it on the edge variables)."""
     a, b = np.asarray(colors)[edges[:, 0]], np.asarray(colors)[edges[:, 1]]
-    return 0.5 * ((a > 0) & (b > 0) & (a != b))
+    return 0.5 * (_names_side(a) & _names_side(b) & (a != b))
+
+
+def _names_side(labels: np.ndarray) -> np.ndarray:
+    """Which side labels name a side (``SIDE_LEFT`` or ``SIDE_RIGHT``)."""
+    return (labels == SIDE_LEFT) | (labels == SIDE_RIGHT)
 
 
 def color_skip_cost(colors: np.ndarray, triples: np.ndarray) -> np.ndarray:
     """``boundary_color_cost``'s term for each triple (i, j, k, ...) of consecutive cones: 1/2
-    where j has no side label and the labels of i and k name different sides (RLD's program
-    puts it on the angle variables f_ijk)."""
+    where j names no side and the labels of i and k name different sides (RLD's program puts
+    it on the angle variables f_ijk)."""
     c = np.asarray(colors)
     a, m, b = c[triples[:, 0]], c[triples[:, 1]], c[triples[:, 2]]
-    return 0.5 * ((m == 0) & (a > 0) & (b > 0) & (a != b))
+    return 0.5 * (~_names_side(m) & _names_side(a) & _names_side(b) & (a != b))
 
 
 def color_start_cost(points: np.ndarray, colors: np.ndarray, pose: Pose) -> np.ndarray:
@@ -233,14 +230,21 @@ def color_start_cost(points: np.ndarray, colors: np.ndarray, pose: Pose) -> np.n
     y = pose.to_local(np.asarray(points, dtype=np.float64))[:, 1]
     side = np.where(y > 0, SIDE_LEFT, np.where(y < 0, SIDE_RIGHT, 0))
     c = np.asarray(colors)
-    return 0.5 * ((c > 0) & (side > 0) & (c != side))
+    return 0.5 * (_names_side(c) & (side > 0) & (c != side))
+
+
+def color_unknown_cost(colors: np.ndarray) -> np.ndarray:
+    """``boundary_color_cost``'s per-cone term over its weight ``unknown``: 1 for each cone
+    labelled unknown, else 0, (N,) floats (RLD's program puts it on the cone variables g_i)."""
+    return (np.asarray(colors) == SIDE_UNKNOWN).astype(np.float64)
 
 
 def lane_color_costs(points: np.ndarray, colors: np.ndarray, lanes, pose: Pose,
                      radius_m: float | None = None, share: bool = False,
-                     near_radius_m: float | None = None) -> np.ndarray:
+                     near_radius_m: float | None = None, unknown: float = 0.0) -> np.ndarray:
     """``boundary_color_cost`` of each open lane's two boundaries, unweighted, (K,) floats (the
-    start radius ``LaneParams.near_radius_m``'s default unless ``near_radius_m``);
+    start radius ``LaneParams.near_radius_m``'s default unless ``near_radius_m``; ``unknown``
+    per unknown cone);
     ``share=True``: that over the cones counted (those of sides of two cones or more; 0 for
     none), which does not grow with the lane's length. ``lanes``: a CLC ``CandidateList``
     (``flat()``) or a sequence of ``(left, right, ...)`` index arrays into ``points``; with
@@ -267,7 +271,8 @@ def lane_color_costs(points: np.ndarray, colors: np.ndarray, lanes, pose: Pose,
                          np.ascontiguousarray(rf, dtype=np.int64),
                          np.ascontiguousarray(rp, dtype=np.int64),
                          float(pose.xy[0]), float(pose.xy[1]), float(h[0]), float(h[1]), near,
-                         0.0 if radius_m is None else float(radius_m), out, counted)
+                         float(unknown), 0.0 if radius_m is None else float(radius_m), out,
+                         counted)
     return out / np.maximum(counted, 1.0) if share else out
 
 
@@ -292,8 +297,8 @@ def lane_cost(
     """RLD's objective (eq. 29) of the lane graph made by two index sequences: the sum of the
     edge coefficients of its edges plus ``w_t`` times the angle cost at every interior cone,
     plus the confidence cost and ``w_color`` times the colour cost of each boundary
-    (``boundary_color_cost``, start radius ``near_radius_m``) when given; every RLD form pays
-    the same (``sided`` is kept for callers and changes nothing since 2026-12-06).
+    (``boundary_color_cost``, start radius ``near_radius_m``, ``color_unknown``) when given;
+    every RLD form pays the same (``sided`` is kept for callers and changes nothing).
     ``heading=False`` leaves out the heading cost, as the incremental solver's frontier
     program does (``edge_objective``).
 
@@ -311,7 +316,8 @@ def lane_cost(
         if confidence is not None and idx.size >= 2:
             total += params.w_confidence * float(confidence_cost(confidence[idx]).sum())
         if colors is not None and idx.size >= 2:
-            wrong += boundary_color_cost(points, colors, idx, pose, params.near_radius_m, closed)
+            wrong += boundary_color_cost(points, colors, idx, pose, params.near_radius_m, closed,
+                                         params.color_unknown)
         if idx.size < 2:
             continue
         if not closed:
@@ -379,7 +385,8 @@ def reach_costs(points: np.ndarray, pose: Pose, params: LaneParams, lanes, radiu
                    float(params.w_width_roughness),
                    np.zeros(0, dtype=np.int64) if colors is None
                    else np.ascontiguousarray(colors, dtype=np.int64),
-                   float(params.w_color), float(params.near_radius_m), out)
+                   float(params.w_color), float(params.near_radius_m),
+                   float(params.color_unknown), out)
     return out
 
 

@@ -287,11 +287,12 @@ def width_roughness(left, right):
 def reach_costs(points, lflat, lptr, rflat, rptr, px, py, hx, hy, radius, expected, tolerance,
                 w_spacing, w_benefit, w_heading, min_distance, w_angle, angle_tolerance,
                 w_regularity, log_regularity, w_width_rough, labels, w_color,
-                near_radius, out):
+                near_radius, unknown, out):
     """For each open lane k (left ``lflat[lptr[k]:lptr[k + 1]]``, right likewise; indices into
     ``points`` (N, 2), metres), both boundaries cut at ``radius`` from the car (``radius_cut``)
     and ``out[k]`` = RLD's objective of the two cut paths (``open_path_costs``), + w_color
-    times their colour cost (``boundary_color``, ``near_radius`` its start radius) when
+    times their colour cost (``boundary_color``, ``near_radius`` its start radius, ``unknown``
+    its charge per unknown cone) when
     ``labels`` (side labels, (N,) int64) is not empty, + w_width_rough times their
     ``width_roughness`` when not 0, in that order: ``rld.costs.reach_costs``."""
     two = np.empty(2)
@@ -316,9 +317,9 @@ def reach_costs(points, lflat, lptr, rflat, rptr, px, py, hx, hy, radius, expect
         cost = 0.0 + (two[0] + two[1])
         if labels.shape[0] > 0 and w_color != 0.0:
             cost += w_color * (boundary_color(points, labels, L, False, px, py, hx, hy,
-                                              near_radius)
+                                              near_radius, unknown)
                                + boundary_color(points, labels, R, False, px, py, hx, hy,
-                                                near_radius))
+                                                near_radius, unknown))
         if w_width_rough != 0.0:
             lxy = np.empty((L.shape[0], 2))
             rxy = np.empty((R.shape[0], 2))
@@ -334,8 +335,9 @@ def reach_costs(points, lflat, lptr, rflat, rptr, px, py, hx, hy, radius, expect
 
 @njit(cache=True)
 def _differ(a, b):
-    """Side labels ``a`` and ``b`` name different sides (0, no side, differs from nothing)."""
-    return a > 0 and b > 0 and a != b
+    """Side labels ``a`` and ``b`` name different sides (left 1, right 2; unknown 0 and either
+    3 name no side and differ from nothing)."""
+    return (a == 1 or a == 2) and (b == 1 or b == 2) and a != b
 
 
 @njit(cache=True)
@@ -347,22 +349,27 @@ def car_side(points, i, px, py, hx, hy):
 
 
 @njit(cache=True)
-def boundary_color(points, labels, path, closed, px, py, hx, hy, near_radius):
+def boundary_color(points, labels, path, closed, px, py, hx, hy, near_radius, unknown):
     """The colour cost of one boundary ``path`` (indices into ``points`` and ``labels``, side
     labels): 1/2 for each edge whose two cones' labels name different sides, 1/2 for each
-    three consecutive cones whose middle one has no side label and whose outer ones name
-    different sides, and (open paths) 1/2 for each end within ``near_radius`` of the car whose
-    label contradicts the side of the car it lies on (``car_side``). 0 for fewer than two
-    cones. ``rld.costs.boundary_color_cost`` says why."""
+    three consecutive cones whose middle one names no side and whose outer ones name
+    different sides, (open paths) 1/2 for each end within ``near_radius`` of the car whose
+    label contradicts the side of the car it lies on (``car_side``), and ``unknown`` for each
+    cone labelled unknown (0). 0 for fewer than two cones. ``rld.costs.boundary_color_cost``."""
     n = path.shape[0]
     if n < 2:
         return 0.0
     total = 0.0
+    if unknown != 0.0:
+        for i in range(n):
+            if labels[path[i]] == 0:
+                total += unknown
     for e in range(n if closed and n > 2 else n - 1):
         if _differ(labels[path[e]], labels[path[(e + 1) % n]]):
             total += 0.5
     for t in range(n if closed and n > 2 else n - 2):
-        if labels[path[(t + 1) % n]] == 0 and _differ(labels[path[t]], labels[path[(t + 2) % n]]):
+        mid = labels[path[(t + 1) % n]]
+        if mid != 1 and mid != 2 and _differ(labels[path[t]], labels[path[(t + 2) % n]]):
             total += 0.5
     if not closed:
         for end in (path[0], path[n - 1]):
@@ -374,7 +381,7 @@ def boundary_color(points, labels, path, closed, px, py, hx, hy, near_radius):
 
 @njit(cache=True)
 def lane_color_counts(points, labels, lflat, lptr, rflat, rptr, px, py, hx, hy, near_radius,
-                      radius, out, counted):
+                      unknown, radius, out, counted):
     """For each open lane k (left ``lflat[lptr[k]:lptr[k + 1]]``, right likewise): ``out[k]`` =
     the ``boundary_color`` of its two boundaries, each cut at ``radius`` from the car (px, py)
     (``radius_cut``; ``radius`` <= 0: whole), and ``counted[k]`` the cones counted (those of
@@ -385,7 +392,8 @@ def lane_color_counts(points, labels, lflat, lptr, rflat, rptr, px, py, hx, hy, 
         if radius > 0.0:
             L = L[:radius_cut(points, L, px, py, radius)]
             R = R[:radius_cut(points, R, px, py, radius)]
-        out[k] = (boundary_color(points, labels, L, False, px, py, hx, hy, near_radius)
-                  + boundary_color(points, labels, R, False, px, py, hx, hy, near_radius))
+        out[k] = (boundary_color(points, labels, L, False, px, py, hx, hy, near_radius, unknown)
+                  + boundary_color(points, labels, R, False, px, py, hx, hy, near_radius,
+                                   unknown))
         counted[k] = (L.shape[0] if L.shape[0] >= 2 else 0) + \
             (R.shape[0] if R.shape[0] >= 2 else 0)

@@ -63,6 +63,12 @@ class IncrementalRld:
     released and re-optimised at each call; ``max_rollbacks``: how often the kept part may be
     cut back by two more cones before a restart."""
 
+    @staticmethod
+    def least_frontier_cones(frontier_cones: int = 3) -> int:
+        """The smallest frontier window: the 4 junction cones and room for more free cones
+        than the 2 x ``frontier_cones`` released, or the lane cannot grow."""
+        return 2 * int(frontier_cones) + 5
+
     def __init__(self, params: LaneParams, backend: str | None = None, frontier_cones: int = 3,
                  max_rollbacks: int = 3, frontier_max_cones: int | None = None) -> None:
         if frontier_cones < 1 or max_rollbacks < 0:
@@ -71,11 +77,10 @@ class IncrementalRld:
         self.frontier_cones = int(frontier_cones)
         self.frontier_max_cones = int(params.max_cones if frontier_max_cones is None
                                       else frontier_max_cones)
-        if self.frontier_max_cones < 2 * self.frontier_cones + 5:
-            # The window holds the 4 junction cones and must have room for more free cones
-            # than the 2 x frontier_cones released, or the lane cannot grow.
+        least = self.least_frontier_cones(self.frontier_cones)
+        if self.frontier_max_cones < least:
             raise ValueError(f"frontier_max_cones must be at least 2 * frontier_cones + 5 = "
-                             f"{2 * self.frontier_cones + 5}")
+                             f"{least}")
         self.max_rollbacks = int(max_rollbacks)
         self.window = RldModel(params, backend=backend)  # from the car: (re)starts
         self.frontier = RldModel(params, backend=backend)  # from the virtual pose
@@ -250,8 +255,10 @@ class IncrementalRld:
             # The colour cost's edge and skip terms that the insertion changes; the window's
             # ends are no boundary ends (a start radius of -1 m: no start term).
             delta += p.w_color * (
-                boundary_color_cost(points, self._colors, with_c, pose, -1.0)
-                - boundary_color_cost(points, self._colors, local, pose, -1.0))
+                boundary_color_cost(points, self._colors, with_c, pose, -1.0,
+                                    unknown=p.color_unknown)
+                - boundary_color_cost(points, self._colors, local, pose, -1.0,
+                                      unknown=p.color_unknown))
         return delta
 
     def _kept_edges(self, points, kl, kr, window) -> np.ndarray:

@@ -243,10 +243,9 @@ def build_program(
     angle variables to the cones (``angle_cover``; they cut no lane graph off, and make the
     relaxation pay the angle costs). ``sided`` builds our side-aware formulation: a set of
     columns per side, each side one path starting near the car on its own side, and the lane
-    width bounded at the cones (see docs/formulation.md). ``colors`` (0 unknown, 1 left, 2
-    right; ``rld.colors`` side labels) and ``confidence`` (0..1) per cone add the colour cost
-    (``costs.boundary_color_cost``: its terms on the edge, angle and near endpoint columns) and
-    the confidence cost.
+    width bounded at the cones (see docs/formulation.md). ``colors`` (``rld.colors`` side
+    labels) and ``confidence`` (0..1) per cone add the colour cost (``costs.boundary_color_cost``:
+    its terms on the edge, angle, cone and near endpoint columns) and the confidence cost.
     ``heading=False`` drops the heading row (eq. 9 / 33) and the heading cost (eq. 25): for a
     program whose start is fixed together with its first edges (``rld.incremental``'s
     frontier), which give the direction that the heading terms stand in for.
@@ -291,6 +290,8 @@ def build_program(
     if colors is not None:
         edge_cost = edge_cost + p.w_color * costs.color_edge_cost(colors, edges)
     cone_cost = np.zeros(N)
+    if colors is not None and p.color_unknown:
+        cone_cost += p.w_color * p.color_unknown * costs.color_unknown_cost(colors)
     if confidence is not None:
         cone_cost += p.w_confidence * costs.confidence_cost(confidence)
     h = np.flatnonzero(cons.heading_mask(points, edges, pose, p.heading_radius_m,

@@ -123,7 +123,7 @@ def as_cones(cones: Any, min_cones: int = MIN_CONES) -> np.ndarray:
 _MAY_BE_ZERO = ("window_behind_m", "nvd_distance_weight", "nvd_lookahead_weight",
                 "contested_margin", "start_min_width_m", "start_lookback_m", "start_reach_m",
                 "duplicate_radius_m", "w_regularity", "w_width_roughness", "w_color",
-                "nvd_color_weight", "rank_color_weight")
+                "color_unknown", "nvd_color_weight", "rank_color_weight")
 
 
 @dataclass(frozen=True)
@@ -184,10 +184,14 @@ class LaneParams:
     """rho_t of the regularity cost (``w_regularity``; ours): the ratio of consecutive edge
     lengths that costs 1, dimensionless, above 1. Chosen by measurement of the true edges:
     docs/tuning.md#regularity_tolerance."""
-    w_color: float = 2.0
+    w_color: float = 0.35
     """Weight of the colour cost (``rld.costs.boundary_color_cost``, 1 per contradicting cone), RLD
     units (eq. 29); the RLD forms, and CLC's dive judge with ``Refinement.judge_color`` (off);
-    0 turns it off. Source: our first choice (docs/tuning.md#w_color)."""
+    0 turns it off. Chosen by measurement: docs/tuning.md#w_color."""
+    color_unknown: float = 1.0
+    """What the colour cost charges each cone of a boundary labelled unknown, in contradicting
+    cones (``rld.costs.boundary_color_cost``; ours): perception leaves false positives
+    unclassified more often than true cones. Chosen by measurement: docs/tuning.md#w_color."""
     w_confidence: float = 1.0
     """Weight of the confidence cost (ours; RLD section V): w (1 - confidence) for every cone the
     lane uses; only with ``confidence``. Source: our first choice."""

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 from rld import LaneSolver, solve_lane
 from rld.colors import (
     CLASSES,
+    SIDE_EITHER,
     SIDE_LEFT,
     SIDE_RIGHT,
     SIDE_UNKNOWN,
@@ -36,10 +37,10 @@ def test_names_codes_and_aliases():
 
 
 def test_side_of_each_class():
-    # Blue marks the left boundary, yellow the right (the rules); orange, big orange and
-    # unknown say nothing about the side.
+    # Blue marks the left boundary, yellow the right (the rules); orange and big orange belong
+    # to either; unknown says nothing.
     assert side_labels(np.arange(5)).tolist() == [SIDE_UNKNOWN, SIDE_RIGHT, SIDE_LEFT,
-                                                  SIDE_UNKNOWN, SIDE_UNKNOWN]
+                                                  SIDE_EITHER, SIDE_EITHER]
 
 
 def test_bad_colours_raise():
@@ -55,9 +56,11 @@ def test_class_probs_checked_and_read():
     probs = np.array([[0.0, 0.1, 0.9, 0.0, 0.0],     # blue: left
                       [0.2, 0.6, 0.2, 0.0, 0.0],     # yellow: right
                       [0.1, 0.45, 0.45, 0.0, 0.0],   # neither has half: unknown
-                      [0.0, 0.0, 0.0, 1.0, 0.0]])    # orange: unknown side
-    assert side_labels_from_probs(parse_class_probs(probs, 4)).tolist() == [
-        SIDE_LEFT, SIDE_RIGHT, SIDE_UNKNOWN, SIDE_UNKNOWN]
+                      [0.0, 0.0, 0.0, 1.0, 0.0],     # orange: either side
+                      [0.0, 0.1, 0.1, 0.4, 0.4]])    # the oranges together: either side
+    assert side_labels_from_probs(parse_class_probs(probs, 5)).tolist() == [
+        SIDE_LEFT, SIDE_RIGHT, SIDE_UNKNOWN, SIDE_EITHER, SIDE_EITHER]
+    probs = probs[:4]
     with pytest.raises(ValueError, match="shape"):
         parse_class_probs(probs[:, :4], 4)
     with pytest.raises(ValueError, match="sum to 1"):
@@ -88,6 +91,23 @@ def test_the_api_takes_names_codes_and_probs_alike():
         assert lane.cost == pytest.approx(lanes[0].cost)
     with pytest.raises(ValueError, match="not both"):
         LaneSolver("rld").solve(CONES, POSE, colors=names, class_probs=probs)
+
+
+def test_no_class_naming_a_side_is_no_colour():
+    # Every cone unknown or orange: no side evidence, the call is colourless (rld.api), so the
+    # unknown charge (LaneParams.color_unknown) does not shorten the lane.
+    plain = solve_lane(CONES, POSE, method="rld", time_limit_s=5)
+    for colors in (["unknown"] * 12, ["orange"] * 6 + ["unknown"] * 6):
+        lane = solve_lane(CONES, POSE, method="rld", colors=colors, time_limit_s=5)
+        assert lane.left.tolist() == plain.left.tolist()
+        assert lane.cost == pytest.approx(plain.cost)
+    # One blue cone among unknowns: colour, and each unknown cone of the lane is charged.
+    colors = ["blue"] + ["unknown"] * 11
+    lane = solve_lane(CONES, POSE, method="rld", colors=colors, time_limit_s=5)
+    p = LaneSolver("rld").params
+    assert (lane.left.tolist(), lane.right.tolist()) == (plain.left.tolist(), plain.right.tolist())
+    used = lane.left.size + lane.right.size
+    assert lane.cost == pytest.approx(plain.cost + p.w_color * p.color_unknown * (used - 1))
 
 
 def test_the_public_integers_mean_classes_not_sides():

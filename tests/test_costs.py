@@ -255,19 +255,22 @@ def test_open_path_costs_against_a_loop(seed, sizes, regularity, heading, yaw):
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
 
 
-def _reference_boundary_color(pts, labels, idx, pose, near_m, closed=False):
-    """``boundary_color_cost`` as its docstring states it, in plain Python."""
+def _reference_boundary_color(pts, labels, idx, pose, near_m, closed=False, unknown=0.0):
+    """``boundary_color_cost`` as its docstring states it, in plain Python (side labels: 0
+    unknown, 1 left, 2 right, 3 either)."""
     idx = [int(i) for i in idx]
     n = len(idx)
     if n < 2:
         return 0.0
     def differ(a, b):
-        return a > 0 and b > 0 and a != b
+        return a in (1, 2) and b in (1, 2) and a != b
     ring = closed and n > 2
     pairs = [(idx[e], idx[(e + 1) % n]) for e in range(n if ring else n - 1)]
     triples = [(idx[t], idx[(t + 1) % n], idx[(t + 2) % n]) for t in range(n if ring else n - 2)]
     total = 0.5 * sum(differ(labels[a], labels[b]) for a, b in pairs)
-    total += 0.5 * sum(labels[j] == 0 and differ(labels[i], labels[k]) for i, j, k in triples)
+    total += 0.5 * sum(labels[j] in (0, 3) and differ(labels[i], labels[k])
+                       for i, j, k in triples)
+    total += unknown * sum(labels[i] == 0 for i in idx)
     if not closed:
         y = pose.to_local(pts)[:, 1]
         for e in (idx[0], idx[-1]):
@@ -277,15 +280,17 @@ def _reference_boundary_color(pts, labels, idx, pose, near_m, closed=False):
     return total
 
 
-@given(seed=st.integers(0, 10_000), n=st.integers(0, 8), closed=st.booleans())
-def test_boundary_color_cost_against_its_statement(seed, n, closed):
+@given(seed=st.integers(0, 10_000), n=st.integers(0, 8), closed=st.booleans(),
+       unknown=st.sampled_from([0.0, 0.5, 0.3]))
+def test_boundary_color_cost_against_its_statement(seed, n, closed, unknown):
     rng = np.random.default_rng(seed)
     pts = rng.uniform(-8, 8, size=(12, 2))
     pose = Pose(0.3, -0.2, float(rng.uniform(-3, 3)))
-    labels = rng.integers(0, 3, size=12)
+    labels = rng.integers(0, 4, size=12)
     idx = rng.permutation(12)[:n]
-    assert costs.boundary_color_cost(pts, labels, idx, pose, 4.5, closed) == \
-        _reference_boundary_color(pts, labels, idx, pose, 4.5, closed)
+    assert costs.boundary_color_cost(pts, labels, idx, pose, 4.5, closed, unknown) == \
+        pytest.approx(_reference_boundary_color(pts, labels, idx, pose, 4.5, closed, unknown),
+                      abs=1e-12)
 
 
 def test_boundary_color_cost_hand_worked():
@@ -303,11 +308,19 @@ def test_boundary_color_cost_hand_worked():
     assert costs.boundary_color_cost(pts, np.full(7, 2), idx, car, 4.5) == 0.5
     assert costs.boundary_color_cost(pts, np.full(7, 2), idx, car, 1.0) == 0.0
     assert costs.boundary_color_cost(pts, labels, idx[:1], car, 4.5) == 0.0
+    # The unknown charge: one unknown cone (the sixth) at 0.5; an orange cone (3, either side)
+    # in its place neither is charged nor breaks the left - ? - right run's 1/2.
+    assert costs.boundary_color_cost(pts, labels, idx[1:], car, 4.5, unknown=0.5) == 2.0
+    orange = np.where(labels == 0, 3, labels)
+    assert costs.boundary_color_cost(pts, orange, idx[1:], car, 4.5, unknown=0.5) == 1.5
+    # An orange cone between two cones of one side costs nothing; its neighbours' edges to it
+    # name no two sides.
+    assert costs.boundary_color_cost(pts, np.array([1, 1, 3, 1, 1, 1, 1]), idx, car, 4.5) == 0
 
 
 @given(seed=st.integers(0, 10_000), k=st.integers(0, 6), radius=st.sampled_from([None, 9.0]),
-       share=st.booleans())
-def test_lane_color_costs_against_a_loop(seed, k, radius, share):
+       share=st.booleans(), unknown=st.sampled_from([0.0, 0.5]))
+def test_lane_color_costs_against_a_loop(seed, k, radius, share, unknown):
     """``lane_color_costs``: per lane, the ``boundary_color_cost`` of each side (cut at the
     radius), or over the cones of the sides of two or more; a candidate list and a list of
     pairs alike."""
@@ -316,7 +329,7 @@ def test_lane_color_costs_against_a_loop(seed, k, radius, share):
     rng = np.random.default_rng(seed)
     pts = rng.uniform(-15, 15, size=(25, 2))
     pose = Pose(0.5, -0.5, 0.2)
-    colors = rng.integers(0, 3, size=25)
+    colors = rng.integers(0, 4, size=25)
     lanes = [(rng.permutation(25)[:rng.integers(0, 7)], rng.permutation(25)[:rng.integers(0, 7)])
              for _ in range(k)]
     want = []
@@ -327,16 +340,18 @@ def test_lane_color_costs_against_a_loop(seed, k, radius, share):
                 idx = costs.within_radius(pts, idx, pose, radius)
             if len(idx) >= 2:
                 n += len(idx)
-            wrong += costs.boundary_color_cost(pts, colors, idx, pose, 3.0)
+            wrong += costs.boundary_color_cost(pts, colors, idx, pose, 3.0, unknown=unknown)
         want.append(wrong / max(n, 1) if share else wrong)
-    got = costs.lane_color_costs(pts, colors, lanes, pose, radius, share=share, near_radius_m=3.0)
+    got = costs.lane_color_costs(pts, colors, lanes, pose, radius, share=share, near_radius_m=3.0,
+                                 unknown=unknown)
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
     if k:
         flat = [np.concatenate([lane[s] for lane in lanes]).astype(np.int64) for s in (0, 1)]
         ptr = [np.r_[0, np.cumsum([len(lane[s]) for lane in lanes])] for s in (0, 1)]
         cands = CandidateList(flat[0], ptr[0], flat[1], ptr[1])
         np.testing.assert_allclose(costs.lane_color_costs(
-            pts, colors, cands, pose, radius, share=share, near_radius_m=3.0), want)
+            pts, colors, cands, pose, radius, share=share, near_radius_m=3.0, unknown=unknown),
+            want)
 
 
 @given(seed=st.integers(0, 10_000), n=st.integers(0, 9), radius=st.floats(0.5, 30.0))
@@ -365,7 +380,7 @@ def test_reach_costs_compose_the_shared_terms(seed, k, radius, regularity, rough
     pts = rng.uniform(-20, 20, size=(30, 2))
     pose = Pose(float(rng.uniform(-3, 3)), float(rng.uniform(-3, 3)), float(rng.uniform(-3, 3)))
     p = LaneParams(w_regularity=regularity, w_width_roughness=rough, w_color=color or 2.0)
-    colors = None if color is None else rng.integers(0, 3, size=30)
+    colors = None if color is None else rng.integers(0, 4, size=30)
     lanes = []
     for _ in range(k):
         perm = rng.permutation(30)

@@ -404,7 +404,7 @@ def test_rld_never_returns_a_lane_the_shared_predicate_rejects():
 def test_colour_and_confidence_costs_against_brute_force(seed, sided):
     points, pose = instance(3000 + seed, 5 + seed % 3)
     rng = np.random.default_rng(seed)
-    colors = rng.integers(0, 3, size=points.shape[0])  # random, so often wrong
+    colors = rng.integers(0, 4, size=points.shape[0])  # random side labels, so often wrong
     confidence = rng.uniform(0, 1, size=points.shape[0])
     assert_optimum_is_brute_force(points, pose, PARAMS, sided, colors=colors,
                                   confidence=confidence)
@@ -444,7 +444,7 @@ def test_colour_and_confidence_costs_hand_worked():
     triples = np.array([[1, 0, 2], [1, 0, 3], [0, 1, 2], [1, 2, 3]])
     assert costs.color_skip_cost(labels, triples).tolist() == [0.5, 0, 0, 0]
     np.testing.assert_allclose(costs.confidence_cost([1.0, 0.25, 0.0]), [0.0, 0.75, 1.0])
-    p = LaneParams()
+    p = LaneParams(w_color=2.0, color_unknown=0.5)  # round weights for the hand sums
     pts = np.array([[0, 2], [3.5, 2], [0, -2], [3.5, -2]], float)
     car = Pose(-1.0, 0.0, 0.0)  # cones 0 and 2 within near_radius_m (4.5 m), 1 and 3 not
     assert costs.color_start_cost(pts, np.array([2, 0, 2, 1]), car).tolist() == [0.5, 0, 0, 0.5]
@@ -468,9 +468,20 @@ def test_colour_and_confidence_costs_hand_worked():
     # (class codes: 1 yellow, right; 2 blue, left).
     for method in ("rld", "rld-sided"):
         lane = solve_lane(pts, car, method=method, colors=[1, 2, 1, 1], time_limit_s=5,
-                          backend="highs")
+                          backend="highs", params=p)
         assert lane.left.tolist() == [0, 1] and lane.right.tolist() == [2, 3]
         assert lane.cost == pytest.approx(-3.0)
+    # Cone 0 unknown: charged color_unknown (0.5) times w_color (2), -5 + 1 = -4; orange
+    # (either side, 3) in its place: no charge, -5. The programs charge the same.
+    assert costs.color_unknown_cost(labels).tolist() == [1, 0, 0, 0]
+    assert costs.lane_cost(pts, [0, 1], [2, 3], car, p, colors=np.array([0, 1, 2, 2])) == \
+        pytest.approx(-4.0)
+    assert costs.lane_cost(pts, [0, 1], [2, 3], car, p, colors=np.array([3, 1, 2, 2])) == \
+        pytest.approx(-5.0)
+    for method in ("rld", "rld-sided"):
+        lane = solve_lane(pts, car, method=method, colors=[0, 2, 1, 1], time_limit_s=5,
+                          backend="highs", params=p)
+        assert lane.left.tolist() == [0, 1] and lane.cost == pytest.approx(-4.0)
     conf = costs.lane_cost(pts, [0, 1], [2, 3], car, p, confidence=np.array([1, 0.5, 1, 0.0]))
     assert conf == pytest.approx(base + p.w_confidence * 1.5)
 
