@@ -77,9 +77,9 @@ class Refinement:
     trim_behind: bool = True
     """Return an open lane from each boundary's first cone not behind the car
     (``trim_behind``)."""
-    judge_color: bool = False
+    judge_color: bool = True
     """The judge's objective includes ``LaneParams.w_color`` times the colour cost when a call
-    has colours; off: with ``w_color`` 2 it raised the 0.5 m rate at A = 0.95 and 0.8."""
+    has colours (RLD's, as the rest of the judge). Chosen: docs/tuning.md#judge_color."""
 
 
 #: The refinement ``ClcModel`` runs by default.

@@ -354,9 +354,9 @@ def solve_lane(
     probabilities in that order (``rld.colors``). Evidence, never a hard rule: a cost for a
     cone on the side its class contradicts and for an unknown one (``rld.costs.
     boundary_color_cost``; ``LaneParams.w_color`` and ``color_unknown`` in RLD and its
-    incremental form), a preference in the nearest-neighbour chain; CLC's uses
-    (``nvd_color_weight``, ``rank_color_weight``, ``clc.refine.Refinement.judge_color``) are off by
-    default (docs/tuning.md#nvd_color_weight); the fitted baseline (``huang``) ignores it.
+    incremental form), a preference in the nearest-neighbour chain, a term after CLC's ranker
+    and in its dive judge (``rank_color_weight``, ``clc.refine.Refinement.judge_color``; its
+    search order, ``nvd_color_weight``, is off); the fitted baseline (``huang``) ignores it.
     ``confidence``: optional per-cone detection confidence in [0, 1], a cost for RLD
     (``LaneParams.w_confidence``). ``time_limit_s``: the solve's time budget (RLD default
     0.4 s; CLC is bounded by ``params.max_iterations`` instead). ``ranker``: the CLC ranker

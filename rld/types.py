@@ -233,10 +233,10 @@ class LaneParams:
     """Radians added to CLC's next-vertex decider score of a cone whose class contradicts the side
     being extended (``clc.search.color_penalties``); 0: off (none helped at colour accuracy 0.95
     without hurting at 0.8 or random labels). Chosen: docs/tuning.md#nvd_color_weight."""
-    rank_color_weight: float = 0.0
-    """Subtracted from CLC's ranker score times the share of a lane's cones within 25 m whose
-    class contradicts their side (``clc.solver.ClcModel._score``; ranker units); 0: off (no
-    change measured). Chosen by measurement: docs/tuning.md#rank_color_weight."""
+    rank_color_weight: float = 1.0
+    """Subtracted from CLC's ranker score times a lane's colour cost per cone within 25 m
+    (``rld.costs.lane_color_costs``, ``share=True``; ``clc.solver.ClcModel._score``; ranker
+    units); 0: off. Chosen by measurement: docs/tuning.md#rank_color_weight."""
     contested_margin: float = 0.2
     """CLC's contested-choice dives (ours; ``clc.search.contested_dives``): a choice of the lane
     whose runner-up scored at most this much higher in the next-vertex decider (its radians) is

@@ -278,13 +278,13 @@ def test_nearest_prefers_its_own_side():
 def test_notes_only_where_colour_is_ignored():
     pts = np.vstack([LEFT, RIGHT])
     codes = ["blue"] * XS.size + ["yellow"] * XS.size
-    for method in ("rld", "rld-sided", "rld-incremental", "nearest"):
+    for method in ("rld", "rld-sided", "rld-incremental", "nearest", "clc"):
         lane = solve_lane(pts, CAR, method=method, colors=codes, time_limit_s=5)
         assert "note" not in lane.stats, method
     assert "colors" in solve_lane(pts, CAR, method="huang", colors=codes).stats["note"]
-    # CLC's colour weights are off by default (docs/tuning.md#nvd_color_weight): it says so,
-    # and not once a weight is on, nor without colours.
-    assert "colors unused" in solve_lane(pts, CAR, method="clc", colors=codes).stats["note"]
-    on = solve_lane(pts, CAR, method="clc", colors=codes, params=LaneParams(nvd_color_weight=0.1))
-    assert "note" not in on.stats
-    assert "note" not in solve_lane(pts, CAR, method="clc").stats
+    # CLC with its three colour uses off says so, and not without colours.
+    from clc.refine import Refinement
+    off = LaneSolver("clc", LaneParams(rank_color_weight=0.0),
+                     options={"refine": Refinement(judge_color=False)})
+    assert "colors unused" in off.solve(pts, CAR, colors=codes).stats["note"]
+    assert "note" not in off.solve(pts, CAR).stats
