@@ -52,7 +52,7 @@ def merge_duplicates(
     - ``colors`` (labels, 0 = unknown; ``None`` in, ``None`` out): a known label beats unknown.
       When members carry different known labels, the one most of them carry wins, and a tie
       gives unknown (0): a cone seen once blue and once yellow is no evidence for either
-      side, and a wrong label costs ``LaneParams.w_color`` where unknown costs nothing. The
+      side (the methods charge it as unknown, ``LaneParams.color_unknown``). The
       rule does not depend on the members' order.
     - ``confidence`` (``None`` in, ``None`` out): the largest of the members' (a cone detected
       twice is at least as certain as its best detection).

@@ -45,9 +45,12 @@ def test_weights_compare_pairs_poses_and_counts_both_ways():
     # Every pose critical: 2 of the 4 were not, +50 % points.
     worse = [_pose("track 1", k, 2.0) for k in range(4)]
     assert bw.paired_interval(base, worse)[0] == 50.0
-    assert bw.parse_setting("0.25:0:2") == (0.25, 0.0, 2.0)
-    with pytest.raises(ValueError, match="three weights"):
-        bw.parse_setting("0.25:1")
+    assert bw.parse_setting("0.25:0:2") == (0.25, 0.0, 2.0, None)
+    assert bw.parse_setting("0:0:0.35:1") == (0.0, 0.0, 0.35, 1.0)
+    assert bw.setting_name(0, 0, 0.35, 1.0) == "n0_r0_j0.35_u1"
+    for bad in ("0.25:1", "0:0:1:1:1", "0:0:-1"):
+        with pytest.raises(ValueError, match="weights >= 0"):
+            bw.parse_setting(bad)
 
 
 def test_latency_table_reports_the_paired_ratio():
