@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.bench_color import SETS, tracks
+from benchmarks.bench_color import SETS, add_set_arguments, tracks
 
 
 def run(set_name: str = "choosing", windows=(1, 30), ranges=(50.0,), fp_rates=(0.0, 0.3),
@@ -65,14 +65,10 @@ def table(records: list[dict]) -> str:
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--set", default="choosing", choices=sorted(SETS))
+    add_set_arguments(ap, "choosing", every=8, generated=8)
     ap.add_argument("--windows", default="1,30", help="comma-separated max_windows values")
     ap.add_argument("--ranges", default="50")
     ap.add_argument("--fp-rates", default="0,0.3")
-    ap.add_argument("--every", type=int, default=8)
-    ap.add_argument("--generated", type=int, default=8,
-                    help="the first N tracks of the set's generated tracks")
-    ap.add_argument("--processes", type=int, default=None)
     ap.add_argument("--out", default="chain_out")
     a = ap.parse_args(argv)
     records = run(a.set, [int(v) for v in a.windows.split(",")],

@@ -47,6 +47,16 @@ def tracks(set_name: str, generated: int) -> list:
     return out
 
 
+def add_set_arguments(ap, set_name: str, every: int, generated: int) -> None:
+    """The options every set benchmark shares: ``--set``, ``--every``, ``--generated`` and
+    ``--processes``, with these defaults."""
+    ap.add_argument("--set", default=set_name, choices=sorted(SETS))
+    ap.add_argument("--every", type=int, default=every)
+    ap.add_argument("--generated", type=int, default=generated,
+                    help="the first N tracks of the set's generated tracks")
+    ap.add_argument("--processes", type=int, default=None)
+
+
 def run(set_name: str = "reporting", methods: Sequence[str] = ("rld", "clc"),
         accuracies: Sequence[float | None] = ACCURACIES, unknown: float = UNKNOWN,
         ranges=(30.0, 50.0), fp_rates=(0.0, 0.1, 0.3, 0.5), every: int = 4,
@@ -150,14 +160,10 @@ def plot(records: list[dict], path: str | Path) -> Path:
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--set", default="reporting", choices=sorted(SETS))
+    add_set_arguments(ap, "reporting", every=4, generated=8)
     ap.add_argument("--methods", default="rld,clc")
     ap.add_argument("--accuracies", default="none,0.5,0.8,0.95,1",
                     help="comma-separated A values; 'none' is the colourless run")
-    ap.add_argument("--every", type=int, default=4)
-    ap.add_argument("--generated", type=int, default=8,
-                    help="the first N tracks of the set's generated tracks")
-    ap.add_argument("--processes", type=int, default=None)
     ap.add_argument("--out", default="colour_out")
     a = ap.parse_args(argv)
     accs = [None if v.strip() == "none" else float(v) for v in a.accuracies.split(",")]

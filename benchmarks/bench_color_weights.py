@@ -102,14 +102,11 @@ def main(argv=None) -> None:
     from rld.types import LaneParams
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--set", default="choosing", choices=sorted(bc.SETS))
+    bc.add_set_arguments(ap, "choosing", every=32, generated=4)
     ap.add_argument("--method", default="clc")
     ap.add_argument("--accuracies", default="0.95,0.8")
     ap.add_argument("--weights", required=True,
                     help="comma-separated settings nvd:rank:w_color")
-    ap.add_argument("--every", type=int, default=32)
-    ap.add_argument("--generated", type=int, default=4)
-    ap.add_argument("--processes", type=int, default=None)
     ap.add_argument("--out", default="colour_weights")
     ap.add_argument("--windows", type=int, default=None,
                     help="LaneParams.max_windows for every run, colourless too (rld's chain; "

@@ -241,10 +241,11 @@ def color_unknown_cost(colors: np.ndarray) -> np.ndarray:
 
 def lane_color_costs(points: np.ndarray, colors: np.ndarray, lanes, pose: Pose,
                      radius_m: float | None = None, share: bool = False,
-                     near_radius_m: float | None = None, unknown: float = 0.0) -> np.ndarray:
+                     near_radius_m: float | None = None,
+                     unknown: float | None = None) -> np.ndarray:
     """``boundary_color_cost`` of each open lane's two boundaries, unweighted, (K,) floats (the
-    start radius ``LaneParams.near_radius_m``'s default unless ``near_radius_m``; ``unknown``
-    per unknown cone);
+    start radius and unknown charge ``LaneParams``' defaults unless ``near_radius_m``,
+    ``unknown``);
     ``share=True``: that over the cones counted (those of sides of two cones or more; 0 for
     none), which does not grow with the lane's length. ``lanes``: a CLC ``CandidateList``
     (``flat()``) or a sequence of ``(left, right, ...)`` index arrays into ``points``; with
@@ -264,6 +265,7 @@ def lane_color_costs(points: np.ndarray, colors: np.ndarray, lanes, pose: Pose,
     counted = np.zeros(len(lp) - 1)
     h = pose.heading
     near = LaneParams().near_radius_m if near_radius_m is None else float(near_radius_m)
+    unknown = LaneParams().color_unknown if unknown is None else float(unknown)
     ck.lane_color_counts(np.ascontiguousarray(points, dtype=np.float64),
                          np.ascontiguousarray(colors, dtype=np.int64),
                          np.ascontiguousarray(lf, dtype=np.int64),
@@ -271,7 +273,7 @@ def lane_color_costs(points: np.ndarray, colors: np.ndarray, lanes, pose: Pose,
                          np.ascontiguousarray(rf, dtype=np.int64),
                          np.ascontiguousarray(rp, dtype=np.int64),
                          float(pose.xy[0]), float(pose.xy[1]), float(h[0]), float(h[1]), near,
-                         float(unknown), 0.0 if radius_m is None else float(radius_m), out,
+                         unknown, 0.0 if radius_m is None else float(radius_m), out,
                          counted)
     return out / np.maximum(counted, 1.0) if share else out
 

@@ -464,24 +464,21 @@ def test_colour_and_confidence_costs_hand_worked():
         pytest.approx(-3.0)
     assert costs.lane_cost(pts, [0, 1], [2, 3], car, p, colors=np.array([2, 1, 1, 1])) == \
         pytest.approx(-2.0)
-    # The programs charge the same: their optimum is that lane at that cost, both forms
-    # (class codes: 1 yellow, right; 2 blue, left).
-    for method in ("rld", "rld-sided"):
-        lane = solve_lane(pts, car, method=method, colors=[1, 2, 1, 1], time_limit_s=5,
-                          backend="highs", params=p)
-        assert lane.left.tolist() == [0, 1] and lane.right.tolist() == [2, 3]
-        assert lane.cost == pytest.approx(-3.0)
     # Cone 0 unknown: charged color_unknown (0.5) times w_color (2), -5 + 1 = -4; orange
-    # (either side, 3) in its place: no charge, -5. The programs charge the same.
+    # (either side, 3) in its place: no charge, -5.
     assert costs.color_unknown_cost(labels).tolist() == [1, 0, 0, 0]
     assert costs.lane_cost(pts, [0, 1], [2, 3], car, p, colors=np.array([0, 1, 2, 2])) == \
         pytest.approx(-4.0)
     assert costs.lane_cost(pts, [0, 1], [2, 3], car, p, colors=np.array([3, 1, 2, 2])) == \
         pytest.approx(-5.0)
+    # The programs charge the same: their optimum is that lane at that cost, both forms
+    # (class codes: 0 unknown, 1 yellow, right; 2 blue, left).
     for method in ("rld", "rld-sided"):
-        lane = solve_lane(pts, car, method=method, colors=[0, 2, 1, 1], time_limit_s=5,
-                          backend="highs", params=p)
-        assert lane.left.tolist() == [0, 1] and lane.cost == pytest.approx(-4.0)
+        for codes, want in (([1, 2, 1, 1], -3.0), ([0, 2, 1, 1], -4.0)):
+            lane = solve_lane(pts, car, method=method, colors=codes, time_limit_s=5,
+                              backend="highs", params=p)
+            assert lane.left.tolist() == [0, 1] and lane.right.tolist() == [2, 3]
+            assert lane.cost == pytest.approx(want)
     conf = costs.lane_cost(pts, [0, 1], [2, 3], car, p, confidence=np.array([1, 0.5, 1, 0.0]))
     assert conf == pytest.approx(base + p.w_confidence * 1.5)
 
