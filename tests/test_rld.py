@@ -241,25 +241,33 @@ def test_backends_agree(seed):
         assert values[2] == pytest.approx(values[0], abs=1e-4)
 
 
-def test_auto_backend_picks_by_size_and_reports_its_choice():
+@pytest.mark.parametrize("seed, n, integral", [(0, 12, True), (2, 12, False), (12, 20, False),
+                                               (5, 20, True)])
+def test_lp_first_settles_only_integral_relaxations(seed, n, integral):
+    """HiGHS's relaxation first: an integral LP optimum is returned as the program's optimum
+    (bound = objective); a fractional one goes on to the MIP; either way the optimum equals the
+    MIP's alone, and ``auto`` hands a fractional relaxation to CP-SAT with the same value."""
     from rld.backends.auto import AutoBackend
+    from rld.backends.highs import HighsBackend
 
+    points, pose = instance(seed, n)
+    prog = build_program(points, pose, PARAMS, strengthen=True)
+    relaxed = HighsBackend().relaxation(prog, 10.0)
+    assert (relaxed is not None) == integral
+    mip = HighsBackend(lp_first=False).solve(prog, 10.0)
+    first = HighsBackend(lp_first=True).solve(prog, 10.0)
     auto = make_backend(None)
-    assert isinstance(auto, AutoBackend)
-    assert [auto.pick(n).name for n in (4, 16, 17, 30, 31, 60)] == \
-        ["cpsat", "cpsat", "highs", "highs", "cpsat", "cpsat"]
-    assert [auto.strengthen_for(n) for n in (12, 20)] == [False, True]
-    points, pose = instance(2003, 12, fp=2)
-    lanes = {}
-    for n_max, chosen in ((12, "cpsat"), (20, "highs")):
-        p = LaneParams(max_cones=n_max)
-        sub = np.vstack([points, points + [40.0, 0.0]])  # enough cones for either window
-        lane = LaneSolver("rld", p).solve(sub, pose)
-        assert lane.stats["backend"] == f"auto:{chosen}"
-        ref = LaneSolver("rld", p, backend=chosen).solve(sub, pose)
-        assert lane.cost == pytest.approx(ref.cost, abs=1e-6)
-        lanes[n_max] = lane
-    assert all(lane.ok for lane in lanes.values())
+    assert isinstance(auto, AutoBackend) and auto.strengthen_for(n)
+    either = auto.solve(prog, 10.0)
+    assert auto.last_name == ("highs-lp" if integral else "cpsat")
+    for r in (first, either):
+        assert r.status == mip.status == "optimal"
+        assert r.objective == pytest.approx(mip.objective, abs=1e-6)
+    if integral:
+        assert np.array_equal(np.abs(relaxed.x - np.round(relaxed.x)), np.zeros(prog.n_cols))
+        assert relaxed.bound == relaxed.objective == pytest.approx(mip.objective, abs=1e-6)
+    lane = LaneSolver("rld", LaneParams(max_cones=n, max_windows=1)).solve(points, pose)
+    assert lane.stats["backend"] in ("auto:highs-lp", "auto:cpsat")
 
 
 def _ring_beside_track():

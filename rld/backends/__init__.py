@@ -23,7 +23,7 @@ __all__ = ["Backend", "BackendResult", "BACKENDS", "DEFAULT_BACKEND", "make_back
 
 def make_backend(name: str | None, **options) -> Backend:
     """The backend called ``name`` (``cpsat``, ``highs``, ``cvxpy``, ``cvxpy:SOLVER`` or
-    ``auto``: CP-SAT or HiGHS by the program's size, ``rld.backends.auto``)."""
+    ``auto``: HiGHS's LP relaxation, then CP-SAT when it is fractional, ``rld.backends.auto``)."""
     name = DEFAULT_BACKEND if name is None else name
     base, _, solver = name.partition(":")
     if base not in BACKENDS:

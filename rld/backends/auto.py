@@ -1,19 +1,18 @@
-"""The ``auto`` backend: per program, the backend measured fastest at its size: CP-SAT up to
-``CPSAT_MAX_CONES`` cones and above ``PRESOLVE_OFF_MAX_CONES``, HiGHS in between; both return
-an optimum of the same program (docs/tuning.md#cpsat_max_cones)."""
+"""The ``auto`` backend: HiGHS's LP relaxation first (an integral optimum settles the program,
+``rld.backends.highs.LP_FIRST``), CP-SAT on the program when the relaxation's optimum is
+fractional; both answers are optima of the same program (docs/tuning.md#auto_backend)."""
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
+from rld.backends import highs
 from rld.backends.base import Backend, BackendResult
 from rld.backends.cpsat import CpSatBackend
-from rld.backends.highs import PRESOLVE_OFF_MAX_CONES, HighsBackend
+from rld.backends.highs import HighsBackend
 from rld.program import LaneProgram
-
-#: Programs with more cones than this and at most ``PRESOLVE_OFF_MAX_CONES`` go to HiGHS.
-#: Chosen by measurement: docs/tuning.md#cpsat_max_cones.
-CPSAT_MAX_CONES = 16
 
 
 class AutoBackend(Backend):
@@ -23,19 +22,22 @@ class AutoBackend(Backend):
         self._cpsat = CpSatBackend()
         self._highs = HighsBackend()
         self.last_name = ""
-        """The backend that solved the last program."""
-
-    def pick(self, n_cones: int) -> Backend:
-        """The backend for a program of ``n_cones`` cones."""
-        if CPSAT_MAX_CONES < n_cones <= PRESOLVE_OFF_MAX_CONES:
-            return self._highs
-        return self._cpsat
+        """What settled the last program: ``highs-lp`` (its relaxation) or ``cpsat``."""
 
     def strengthen_for(self, n_cones: int) -> bool:
-        return self.pick(n_cones).strengthen
+        # The angle-cover rows tighten the relaxation solved first.
+        return highs.LP_FIRST or self._cpsat.strengthen
 
     def solve(self, program: LaneProgram, time_limit_s: float,
               hint: np.ndarray | None = None) -> BackendResult:
-        backend = self.pick(program.n_cones)
-        self.last_name = backend.name
-        return backend.solve(program, time_limit_s, hint)
+        t0 = time.perf_counter()
+        if highs.LP_FIRST:
+            settled = self._highs.relaxation(program, time_limit_s)
+            if settled is not None:
+                self.last_name = "highs-lp"
+                return settled
+        self.last_name = "cpsat"
+        result = self._cpsat.solve(
+            program, max(time_limit_s - (time.perf_counter() - t0), 1e-3), hint)
+        result.time_s = time.perf_counter() - t0
+        return result

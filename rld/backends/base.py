@@ -38,7 +38,7 @@ class Backend:
     strengthen = True
 
     def strengthen_for(self, n_cones: int) -> bool:
-        """``strengthen`` for a program of ``n_cones`` cones (``auto`` picks per size)."""
+        """``strengthen`` for a program of ``n_cones`` cones."""
         return self.strengthen
 
     def solve(

@@ -1,5 +1,6 @@
-"""HiGHS backend through highspy: the program passed as one HighsLp with integrality, the warm
-start as a MIP start (``setSolution``)."""
+"""HiGHS backend through highspy: the program passed as one HighsLp, its LP relaxation solved
+first (``LP_FIRST``); only when that optimum is fractional, the program with integrality and
+the warm start as a MIP start (``setSolution``)."""
 
 from __future__ import annotations
 
@@ -20,6 +21,12 @@ from rld.program import LaneProgram
 PRESOLVE_OFF_MAX_CONES = 30
 #: Below this budget presolve is off at any size: it would not stop at the limit.
 PRESOLVE_MIN_BUDGET_S = 0.25
+#: Solve the LP relaxation first: an integral LP optimum is an optimum of the program (the LP
+#: bound is met by a 0/1 point), proven without the MIP's root work. Chosen by measurement:
+#: docs/tuning.md#lp_first.
+LP_FIRST = True
+#: A relaxation value this close to 0 or 1 counts as integral.
+INTEGRAL_TOL = 1e-6
 
 
 def presolve_option(n_cones: int, time_limit_s: float) -> str:
@@ -32,15 +39,16 @@ def presolve_option(n_cones: int, time_limit_s: float) -> str:
 class HighsBackend(Backend):
     name = "highs"
 
-    def __init__(self, threads: int = 1) -> None:
+    def __init__(self, threads: int = 1, lp_first: bool | None = None) -> None:
         import highspy  # noqa: F401
 
         self.threads = int(threads)
+        self.lp_first = LP_FIRST if lp_first is None else bool(lp_first)
 
-    def solve(self, program: LaneProgram, time_limit_s: float, hint=None) -> BackendResult:
+    def _model(self, program: LaneProgram, time_limit_s: float, integer: bool):
+        """A silent ``Highs`` holding ``program`` (with integrality when ``integer``)."""
         import highspy
 
-        t0 = time.perf_counter()
         inf = highspy.kHighsInf
         h = highspy.Highs()
         h.silent()
@@ -65,8 +73,51 @@ class HighsBackend(Backend):
         lp.a_matrix_.value_ = csc.data.astype(np.float64)
         lp.a_matrix_.num_col_ = n
         lp.a_matrix_.num_row_ = m
-        lp.integrality_ = [highspy.HighsVarType.kInteger] * n
+        if integer:
+            lp.integrality_ = [highspy.HighsVarType.kInteger] * n
         h.passModel(lp)
+        return h
+
+    @staticmethod
+    def _relaxed(h, program: LaneProgram, t0: float, time_limit_s: float):
+        """Solve the LP relaxation held by ``h``: ``optimal`` when its optimum is a 0/1 point
+        (then an optimum of the program), ``infeasible`` when it has none (nor has the
+        program), else ``None``."""
+        import highspy
+
+        h.setOptionValue("time_limit", max(float(time_limit_s) - (time.perf_counter() - t0),
+                                           1e-3))
+        h.run()
+        status = h.getModelStatus()
+        if status == highspy.HighsModelStatus.kInfeasible:
+            return BackendResult("infeasible", None, time_s=time.perf_counter() - t0)
+        if status == highspy.HighsModelStatus.kOptimal:
+            x = np.asarray(h.getSolution().col_value)
+            if np.all(np.abs(x - np.round(x)) <= INTEGRAL_TOL):
+                x = np.round(x)
+                obj = float(program.c @ x)
+                return BackendResult("optimal", x, obj, obj, time.perf_counter() - t0)
+        return None
+
+    def relaxation(self, program: LaneProgram, time_limit_s: float) -> BackendResult | None:
+        """The program's LP relaxation alone (``_relaxed``): a result when it settles the
+        program, else ``None``."""
+        t0 = time.perf_counter()
+        return self._relaxed(self._model(program, time_limit_s, False), program, t0,
+                             time_limit_s)
+
+    def solve(self, program: LaneProgram, time_limit_s: float, hint=None) -> BackendResult:
+        import highspy
+
+        t0 = time.perf_counter()
+        n = program.n_cols
+        h = self._model(program, time_limit_s, not self.lp_first)
+        if self.lp_first:
+            settled = self._relaxed(h, program, t0, time_limit_s)
+            if settled is not None:
+                return settled
+            h.changeColsIntegrality(n, np.arange(n, dtype=np.int32),
+                                    np.full(n, highspy.HighsVarType.kInteger.value, np.uint8))
         if hint is not None:
             sol = highspy.HighsSolution()
             sol.col_value = [float(v) for v in hint]
