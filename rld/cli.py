@@ -897,6 +897,52 @@ def bench_incremental(range_m: float, fp_rates: list[float], every: int, track_i
     _emit(text, out)
 
 
+@bench.command("latency")
+@click.option("--methods", default="rld,rld-incremental,clc", show_default=True,
+              help="Comma-separated method names.")
+@click.option("--range-m", default=50.0, show_default=True, type=_METRES,
+              help="Perception range, metres.")
+@click.option("--fp-rate", default=0.3, show_default=True, type=_RATE,
+              help="The share of the map's cones that are false, 0 <= rate < 1.")
+@click.option("--every", default=1, show_default=True, type=_COUNT,
+              help="Every k-th pose (poses lie 1 m apart), a count. The solvers keep state "
+                   "between calls: keep 1 for real figures.")
+@click.option("--tracks", "track_ids", default=",".join(str(k) for k in (1, 2, 3, 4, 6, 7)),
+              show_default=True, type=_TRACK_IDS,
+              help="Comma-separated shared dataset track numbers.")
+@click.option("--time-limit", "time_limit_s", default=None, type=_METRES,
+              show_default="each method's default",
+              help="Budget per call, seconds.")
+@click.option("--quick", is_flag=True,
+              help="A tiny run: the first track, its first 20 poses; off by default.")
+@click.option("--out", default=None, metavar="FILE", callback=_out_file, show_default="none",
+              help=_OUT_MD_HELP)
+def bench_latency(methods: str, range_m: float, fp_rate: float, every: int,
+                  track_ids: list[int], time_limit_s: float | None, quick: bool,
+                  out: str | None) -> None:
+    """Latency of a reused solver on real maps against the 20 Hz targets (issue 40)."""
+    import shlex
+
+    names = [m.strip() for m in methods.split(",") if m.strip()]
+    unknown = [m for m in names if m not in METHODS]
+    if unknown or not names:
+        raise click.BadParameter(f"{unknown or methods!r}: use some of {', '.join(METHODS)}",
+                                 param_hint="'--methods'")
+    mod = _benchmark_module("bench_latency")
+    if not mod.dataset_available():
+        click.echo("rld bench latency: skipped, the racetrack dataset was not found (set "
+                   "RLD_DATASET_DIR or put it in ../shared/data/fsd_racetrack_dataset)", err=True)
+        return
+    try:
+        records = mod.run(methods=names, range_m=range_m, fp_rate=fp_rate, every=every,
+                          tracks=track_ids, time_limit_s=time_limit_s, quick=quick)
+    except FileNotFoundError as exc:
+        raise UserError(_os_error(exc)) from exc
+    command = "rld bench latency " + " ".join(shlex.quote(a) for a in sys.argv[3:])
+    _emit(mod.to_markdown(records, range_m, fp_rate, time_limit_s, command=command.strip()),
+          out)
+
+
 @bench.command("clc")
 @click.option("--ranges", default="30,50", show_default=True, type=_RANGES, help=_RANGES_HELP)
 @click.option("--fp-rates", default="0,0.1,0.3,0.5", show_default=True, type=_RATES,

@@ -333,6 +333,23 @@ def test_bench_incremental_quick(dataset_dir):
     assert "| 0% | all |" in result.output and "lane cones" in result.output
 
 
+def test_bench_latency_quick(dataset_dir):
+    result = CliRunner().invoke(main, ["bench", "latency", "--quick", "--methods",
+                                       "rld,rld-incremental"])
+    assert result.exit_code == 0, result.output
+    rows = {r.split("|")[1].strip(): [c.strip() for c in r.strip("|").split("|")]
+            for r in result.output.splitlines() if r.startswith("| rld")}
+    assert set(rows) == {"rld", "rld-incremental"}
+    for cells in rows.values():
+        assert cells[1] == "19"  # 20 poses, the first call left out
+        median, p95, top = (float(c) for c in cells[2:5])
+        assert 0 < median <= p95 <= top
+    assert int(rows["rld"][7].split(" / ")[1]) >= 2  # the chain solved windows past the car's
+    assert rows["rld-incremental"][7] == "-"
+    bad = CliRunner().invoke(main, ["bench", "latency", "--methods", "rld,foo"])
+    assert bad.exit_code != 0 and "foo" in bad.output
+
+
 def test_bench_clc_failures_quick(dataset_dir):
     result = CliRunner().invoke(main, ["bench", "clc-failures", "--ranges", "30", "--fp-rates",
                                        "0.3", "--every", "25", "--processes", "1"])
