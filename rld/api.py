@@ -71,7 +71,9 @@ class _HuangMethod:
 class _RldMethod:
     """RLD (Brandes et al. 2020) with a reusable model and warm starts: the car's window, then
     up to ``params.max_windows - 1`` frontier windows chained on its end within the call's
-    budget (``rld.incremental.IncrementalRld.chain``; not in the sided form)."""
+    budget (``rld.incremental.IncrementalRld.chain``; not in the sided form). A reused solver
+    keeps its chain: a later call re-solves the car's window, re-attaches the kept chain where
+    they join and grows it for at most ``KEPT_GROWTH_S`` (a whole chain where they do not)."""
 
     backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy", "auto")
     rankers = False
@@ -82,6 +84,7 @@ class _RldMethod:
 
         self.model = RldModel(params, backend=backend, sided=self.sided)
         self.chainer = None
+        self.kept = None  # the last call's chain (rld.incremental.KeptChain)
         if int(params.max_windows) > 1 and not self.sided:
             from rld.incremental import IncrementalRld
 
@@ -91,16 +94,21 @@ class _RldMethod:
                                           frontier_max_cones=max(int(params.max_cones), least))
 
     def solve(self, points, pose, colors=None, time_limit_s=None, confidence=None) -> Lane:
+        from rld.incremental import KEPT_GROWTH_S
         from rld.solver import DEFAULT_TIME_LIMIT_S
 
         t0 = time.perf_counter()
         lane = self.model.solve(points, pose, time_limit_s=time_limit_s, colors=colors,
                                 confidence=confidence)
+        kept, self.kept = self.kept, None
         if self.chainer is None or not lane.ok:
             return lane
         budget = DEFAULT_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
-        return self.chainer.chain(points, pose, lane, t0, budget,
-                                  int(self.model.params.max_windows), colors=colors)
+        lane = self.chainer.chain(points, pose, lane, t0, budget,
+                                  int(self.model.params.max_windows), colors=colors,
+                                  kept=kept, grow_s=KEPT_GROWTH_S)
+        self.kept = self.chainer.keep(points, pose, lane)
+        return lane
 
 
 class _RldSidedMethod(_RldMethod):

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -24,7 +25,8 @@ from rld.costs import boundary_color_cost, lane_cost
 from rld.solver import MATCH_TOLERANCE_M, RldModel
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
-__all__ = ["IncrementalRld", "POSE_JUMP_M", "POSE_JUMP_RAD"]
+__all__ = ["IncrementalRld", "KeptChain", "pose_jumped", "POSE_JUMP_M", "POSE_JUMP_RAD",
+           "KEPT_GROWTH_S"]
 
 #: A pose more than this far (metres) from the last call's is a jump: the lane restarts from
 #: scratch. Source: our choice.
@@ -42,8 +44,37 @@ MIN_AHEAD = 6
 #: the shared predicate (``lane_is_feasible`` less w_max, as ``rld.solver`` checks a window's).
 CHAIN_STOPS = ("time budget", "window limit", "no frontier", "no growth", "closed",
                "infeasible step")
+#: A reused ``rld`` solver's call that re-attaches the last call's chain grows it only while
+#: the call has run less than this, seconds (the kept chain carries the rest; 20 Hz).
+#: Chosen by measurement: docs/tuning.md#kept_growth_s.
+KEPT_GROWTH_S = 0.05
 #: The frontier program's stats an extend call passes on in ``lane.stats["frontier"]``.
 FRONTIER_STATS = ("n_cones_used", "n_cols", "n_rows", "solve_time_s", "backend", "objective")
+
+
+def pose_jumped(pose: Pose, previous: Pose | None) -> bool:
+    """Whether ``pose`` lies more than ``POSE_JUMP_M`` or ``POSE_JUMP_RAD`` from ``previous``
+    (never when there is none)."""
+    if previous is None:
+        return False
+    d = math.hypot(pose.x - previous.x, pose.y - previous.y)
+    dyaw = abs((pose.yaw - previous.yaw + math.pi) % (2 * math.pi) - math.pi)
+    return d > POSE_JUMP_M or dyaw > POSE_JUMP_RAD
+
+
+@dataclass
+class KeptChain:
+    """The lane a chained ``rld`` call returned, kept for the solver's next call: each side's
+    cone positions (metres, from the car on), the map it was found on, the car's pose, and
+    whether it closed, every window was proven optimal, and why the chain stopped."""
+
+    left_xy: np.ndarray
+    right_xy: np.ndarray
+    map_xy: np.ndarray
+    pose: Pose
+    closed: bool
+    optimal: bool
+    stop: str
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -103,16 +134,14 @@ class IncrementalRld:
     # -- helpers -------------------------------------------------------------------------
 
     def _jumped(self, pose: Pose) -> bool:
-        if self.prev_pose is None:
-            return False
-        d = math.hypot(pose.x - self.prev_pose.x, pose.y - self.prev_pose.y)
-        dyaw = abs((pose.yaw - self.prev_pose.yaw + math.pi) % (2 * math.pi) - math.pi)
-        return d > POSE_JUMP_M or dyaw > POSE_JUMP_RAD
+        return pose_jumped(pose, self.prev_pose)
 
-    def _match(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    def _match(self, points: np.ndarray, sides=None) -> tuple[np.ndarray, np.ndarray] | None:
+        """Each side's cones (positions; default the kept lane's) as indices into ``points``,
+        each within ``MATCH_TOLERANCE_M``; ``None`` when one is missing or two share a cone."""
         tree = cKDTree(points)
         out = []
-        for xy in (self.left_xy, self.right_xy):
+        for xy in (self.left_xy, self.right_xy) if sides is None else sides:
             dist, idx = tree.query(xy, distance_upper_bound=MATCH_TOLERANCE_M)
             if not np.all(np.isfinite(dist)) or np.unique(idx).size != idx.size:
                 return None
@@ -364,23 +393,111 @@ class IncrementalRld:
 
     # -- chained windows inside one call (method "rld") ---------------------------------
 
+    def reattach(self, points: np.ndarray, pose: Pose, lane: Lane, kept: KeptChain):
+        """The car's window lane ``lane`` joined to ``kept``, the chain of the solver's last
+        call: each side runs on along its kept side from the last edge the two share (along
+        the window's where the kept side ends there), up to its first cone near a cone new
+        since then (the windows past the car's saw another map). Returns (L, R, closed, kept
+        cones, whether a side was cut), or why not (a string): the pose jumped, a kept cone is
+        gone, a side does not join, or the joined lane fails a chain step's checks."""
+        if pose_jumped(pose, kept.pose):
+            return "pose jump"
+        matched = self._match(points, (kept.left_xy, kept.right_xy))
+        if matched is None:
+            return "a kept cone is gone"
+        if kept.closed:
+            on_loop = True  # the window's sides run along the loop: the loop stands
+            for W, K in zip((lane.left, lane.right), matched, strict=True):
+                pos = {int(c): j for j, c in enumerate(K)}
+                js = np.array([pos.get(int(c), -1) for c in W])
+                on_loop &= bool(np.all(js >= 0) and np.all(np.diff(js) % K.size == 1))
+            starts = [self._start_index(points, pose, S, closed=True) for S in matched]
+            matched = tuple(np.roll(S, -j) for S, j in zip(matched, starts, strict=True))
+            if on_loop:
+                return matched[0], matched[1], True, int(matched[0].size + matched[1].size), \
+                    False
+            # Else the loop, opened at the car, is joined as an open chain, which grows on.
+        d, _ = cKDTree(kept.map_xy).query(points, distance_upper_bound=MATCH_TOLERANCE_M)
+        new = points[~np.isfinite(d)]
+        near_new = cKDTree(new) if new.shape[0] else None
+        sides, cut = [], bool(kept.closed)  # an opened loop's end is tried again
+        for W, K in zip((lane.left, lane.right), matched, strict=True):
+            pos = {int(c): j for j, c in enumerate(K)}
+            join = None
+            for i in range(W.size - 1, 0, -1):
+                j = pos.get(int(W[i]))
+                if j is not None and j >= 1 and K[j - 1] == W[i - 1]:
+                    join = (i, j)
+                    break
+            if join is None:
+                return "a side does not join"
+            i, j = join
+            tail = K[j + 1:]
+            back = np.flatnonzero(np.isin(tail, W[: i + 1]))  # an opened loop comes back
+            tail = tail[: back[0]] if back.size else tail
+            if near_new is not None and tail.size:
+                dn, _ = near_new.query(points[tail],
+                                       distance_upper_bound=self.params.max_cone_spacing_m)
+                hit = np.flatnonzero(np.isfinite(dn))
+                if hit.size:
+                    tail, cut = tail[: hit[0]], True
+            # On along the kept side; where that ends first, on along the window's.
+            sides.append((np.concatenate([W[: i + 1], tail]) if tail.size else W, i))
+        (L, il), (R, ir) = sides
+        if (np.unique(L).size != L.size or np.unique(R).size != R.size
+                or np.intersect1d(L, R).size):
+            return "the joined sides share a cone"
+        if not (self._consistent(points, L, R, il, ir, (False, False))
+                and lane_is_feasible(points[L], points[R], self.params, max_width=False)):
+            return "the joined lane fails the checks"
+        return L, R, False, int(L.size - il - 1 + R.size - ir - 1), cut
+
+    @staticmethod
+    def keep(points: np.ndarray, pose: Pose, lane: Lane) -> KeptChain | None:
+        """What the next call of a reused ``rld`` solver needs of the chained ``lane``."""
+        if not lane.ok or "chain" not in lane.stats:
+            return None
+        return KeptChain(points[lane.left], points[lane.right], np.array(points, dtype=float),
+                         pose, bool(lane.closed), lane.status is LaneStatus.OPTIMAL,
+                         lane.stats["chain"]["stop"])
+
     def chain(self, points: np.ndarray, pose: Pose, lane: Lane, t0: float, budget_s: float,
-              max_windows: int, colors: np.ndarray | None = None) -> Lane:
+              max_windows: int, colors: np.ndarray | None = None,
+              kept: KeptChain | None = None, grow_s: float | None = None) -> Lane:
         """The car's window lane ``lane`` grown by frontier steps (``_extend``) on this map
         until a stop of ``CHAIN_STOPS``; the call began at ``t0`` (``time.perf_counter``) with
-        ``budget_s`` seconds. Stateless: ``solve``'s kept lane is not touched."""
+        ``budget_s`` seconds. ``kept``: the last call's chain, re-attached first (``reattach``);
+        once it is, the chain grows only for the call's first ``grow_s`` seconds. Without it
+        the chain is stateless (``solve``'s kept lane is never touched)."""
+        if kept is None:
+            grow_s = None
         L, R = lane.left, lane.right
         self._colors = colors
         deadline = t0 + budget_s
         step_s = time.perf_counter() - t0  # the car's window: the first step estimate
         windows, grown, closed = 1, 0, False
         optimal = lane.status is LaneStatus.OPTIMAL
-        while True:
+        attached = self.reattach(points, pose, lane, kept) if kept is not None else None
+        why = attached if isinstance(attached, str) else None
+        attached = None if why else attached
+        n_kept, stop = 0, None
+        grow_until = deadline
+        if attached is not None:
+            if grow_s is not None:
+                grow_until = min(deadline, t0 + grow_s)
+            L, R, closed, n_kept, cut = attached
+            optimal &= kept.optimal
+            if closed:
+                stop = "closed"
+            elif not cut and kept.stop not in ("time budget", "window limit"):
+                stop = kept.stop  # the same end on the same map: the same step would stop
+        stepped = stop is None
+        while stop is None:
             if windows >= max_windows:
                 stop = "window limit"
                 break
             now = time.perf_counter()
-            if now + step_s > deadline:  # the next step would likely end after the budget
+            if now + step_s > grow_until:  # the next step would likely end after the budget
                 stop = "time budget"
                 break
             self._last_frontier = {}
@@ -403,14 +520,24 @@ class IncrementalRld:
             if closes:
                 closed, stop = True, "closed"
                 break
+        if attached is not None and not grown and stop in ("no growth", "no frontier",
+                                                           "infeasible step") and stepped:
+            # The kept chain's end does not extend on this map: the chain from the car's
+            # window, as a stateless call would find it, when it is longer.
+            fresh = self.chain(points, pose, lane, t0, budget_s, max_windows, colors)
+            if fresh.left.size + fresh.right.size > L.size + R.size or fresh.closed:
+                fresh.stats["chain"]["not_kept"] = "the kept end does not extend"
+                return fresh
         stats = dict(lane.stats)
         stats["chain"] = {"windows": windows, "steps": grown, "stop": stop,
+                          "kept_cones": n_kept, "not_kept": why,
+                          "cut": bool(attached is not None and attached[4]),
                           "added_cones": int(L.size + R.size - lane.left.size
                                              - lane.right.size)}
-        if not grown:
+        if not grown and attached is None:
             return Lane(cones=points, left=L, right=R, status=lane.status,
                         message=lane.message, cost=lane.cost, stats=stats)
-        if closed:  # a loop: each side from the car, as rld-incremental returns it
+        if closed and grown:  # a loop: each side from the car, as rld-incremental returns it
             L, R = (np.roll(S, -self._start_index(points, pose, S, closed=True)) for S in (L, R))
         # OPTIMAL: every window's program proven optimal (not the chained lane as a whole).
         return Lane(cones=points, left=L, right=R,

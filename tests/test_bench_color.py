@@ -62,3 +62,21 @@ def test_latency_table_reports_the_paired_ratio():
     row = bl.table(lat).splitlines()[2]
     assert row.startswith("| clc | 3 | 20.0 / ")
     assert row.endswith("| 1.100 (1.000) |")
+
+
+def test_kept_chain_table_pairs_each_variant_with_the_stateless_chain():
+    from benchmarks import bench_kept as bk
+
+    def rec(method, k, dev, pred, latency, first=False, range_m=50.0):
+        return dict(_pose("track 1", k, dev, range_m=range_m), method=method,
+                    pred_length_m=pred, true_length_m=20.0, latency_s=latency,
+                    first_call=first)
+
+    base = [rec(bk.STATELESS, k, d, 20.0, 0.1, k == 0) for k, d in enumerate((0.2, 0.7, 1.5, 0))]
+    kept = [rec("kept 0.05 s", k, d, 10.0, 0.01, k == 0)
+            for k, d in enumerate((0.2, 0.2, 1.5, 0.7))]
+    lines = bk.table(base + kept).splitlines()
+    assert lines[2].startswith("| stateless | 4 | 25.00 | 50.00 | 20.0 / 20.0 | 100 / 100 / 100 |")
+    # > 1 m: the same pose; > 0.5 m: pose 1 no longer, pose 3 now: 2 of 4 both ways, +0.
+    assert lines[3].startswith("| kept 0.05 s | 4 | 25.00 (+0.00 [+0.00, +0.00]) | 50.00 (+0.00")
+    assert "| 10.0 / 20.0 | 10 / 10 / 10 | 50 m 10%: 25.00 / 50.00, 10 |" in lines[3]

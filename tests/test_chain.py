@@ -119,7 +119,8 @@ def test_the_window_limit_stops_the_chain():
 def test_the_time_budget_stops_the_chain_and_is_honoured():
     cones, n = straight(400.0)
     solver = LaneSolver("rld", params=LaneParams(max_windows=1000))
-    solver.solve(cones, CAR, time_limit_s=5.0)  # set-up and compilation apart
+    # Set-up and compilation apart, on a map 1 km away: the call below does not keep its chain.
+    solver.solve(cones + [0.0, 1000.0], Pose(0.0, 1000.0, 0.0), time_limit_s=5.0)
     budget = 0.08
     t0 = time.perf_counter()
     lane = solver.solve(cones, CAR, time_limit_s=budget)
@@ -161,3 +162,66 @@ def test_the_default_rld_is_chained():
 def test_max_windows_below_one_is_refused():
     with pytest.raises(ValueError, match="max_windows"):
         LaneParams(max_windows=0)
+
+
+def _same(a, b) -> None:
+    np.testing.assert_array_equal(a.left, b.left)
+    np.testing.assert_array_equal(a.right, b.right)
+    assert a.closed == b.closed
+
+
+def test_a_reused_solver_keeps_its_chain_and_returns_the_stateless_lane():
+    cones, n = straight()
+    solver = LaneSolver("rld")
+    first = solver.solve(cones, CAR, time_limit_s=5.0)
+    assert first.stats["chain"]["kept_cones"] == 0  # nothing kept yet
+    pose = Pose(2.0, 0.0, 0.0)
+    lane = solver.solve(cones, pose, time_limit_s=5.0)
+    chain = lane.stats["chain"]
+    # The car's window re-solved, the rest re-attached; the kept end did not extend before,
+    # on the same map it is not tried again.
+    assert chain["kept_cones"] == 2 * n - 20 and chain["steps"] == 0 and not chain["cut"]
+    assert chain["stop"] == first.stats["chain"]["stop"]
+    _same(lane, solve_lane(cones, pose, time_limit_s=5.0))
+    np.testing.assert_array_equal(lane.left, np.arange(n))
+
+
+def test_new_cones_near_the_kept_tail_cut_it_and_the_chain_grows_on():
+    cones, n = straight()
+    short = np.r_[0:n - 6, n:2 * n - 6]  # the last six cones a side not yet seen
+    solver = LaneSolver("rld")
+    first = solver.solve(cones[short], CAR, time_limit_s=5.0)
+    assert first.left.size == n - 6
+    pose = Pose(1.0, 0.0, 0.0)
+    lane = solver.solve(cones, pose, time_limit_s=5.0)
+    chain = lane.stats["chain"]
+    assert chain["cut"] and chain["steps"] >= 1 and 0 < chain["kept_cones"] < 2 * (n - 6) - 20
+    _same(lane, solve_lane(cones, pose, time_limit_s=5.0))
+    np.testing.assert_array_equal(lane.right, np.arange(n, 2 * n))
+
+
+def test_a_pose_jump_forgets_the_chain():
+    cones, _ = straight()
+    solver = LaneSolver("rld")
+    solver.solve(cones, CAR, time_limit_s=5.0)
+    far = Pose(40.0, 0.0, 0.0)
+    lane = solver.solve(cones, far, time_limit_s=5.0)
+    assert lane.stats["chain"]["not_kept"] == "pose jump"
+    _same(lane, solve_lane(cones, far, time_limit_s=5.0))
+
+
+def test_a_kept_ring_stays_closed_and_runs_from_the_car():
+    sides = []
+    for r in (25.0, 29.0):
+        n = int(round(2 * math.pi * r / SPACING_M))
+        t = np.arange(n) * 2 * math.pi / n + 0.5 / r
+        sides.append(np.column_stack([r * np.sin(t), 27.0 - r * np.cos(t)]))
+    cones = np.vstack(sides)
+    solver = LaneSolver("rld")
+    assert solver.solve(cones, CAR, time_limit_s=5.0).closed
+    a = 4.0 / 27.0  # 4 m on along the centre line
+    pose = Pose(27.0 * math.sin(a), 27.0 - 27.0 * math.cos(a), a)
+    lane = solver.solve(cones, pose, time_limit_s=5.0)
+    assert lane.closed and lane.stats["chain"]["kept_cones"] == cones.shape[0]
+    _same(lane, solve_lane(cones, pose, time_limit_s=5.0))
+    assert lane.left[0] != 0  # from the car: the ring rolled on
