@@ -396,8 +396,8 @@ class IncrementalRld:
     def reattach(self, points: np.ndarray, pose: Pose, lane: Lane, kept: KeptChain):
         """The car's window lane ``lane`` joined to ``kept``, the chain of the solver's last
         call: each side runs on along its kept side from the last edge the two share (along
-        the window's where the kept side ends there), up to its first cone near a cone new
-        since then (the windows past the car's saw another map). Returns (L, R, closed, kept
+        the window's where the kept side ends there), up to its first cone near a cone new or
+        gone since then (the windows past the car's saw another map). Returns (L, R, closed, kept
         cones, whether a side was cut), or why not (a string): the pose jumped, a kept cone is
         gone, a side does not join, or the joined lane fails a chain step's checks."""
         if pose_jumped(pose, kept.pose):
@@ -417,9 +417,11 @@ class IncrementalRld:
                 return matched[0], matched[1], True, int(matched[0].size + matched[1].size), \
                     False
             # Else the loop, opened at the car, is joined as an open chain, which grows on.
+        # Cones new since then, and cones gone since then: the map changed there.
         d, _ = cKDTree(kept.map_xy).query(points, distance_upper_bound=MATCH_TOLERANCE_M)
-        new = points[~np.isfinite(d)]
-        near_new = cKDTree(new) if new.shape[0] else None
+        g, _ = cKDTree(points).query(kept.map_xy, distance_upper_bound=MATCH_TOLERANCE_M)
+        changed = np.vstack([points[~np.isfinite(d)], kept.map_xy[~np.isfinite(g)]])
+        near_new = cKDTree(changed) if changed.shape[0] else None
         sides, cut = [], bool(kept.closed)  # an opened loop's end is tried again
         for W, K in zip((lane.left, lane.right), matched, strict=True):
             pos = {int(c): j for j, c in enumerate(K)}

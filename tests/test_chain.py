@@ -200,6 +200,18 @@ def test_new_cones_near_the_kept_tail_cut_it_and_the_chain_grows_on():
     np.testing.assert_array_equal(lane.right, np.arange(n, 2 * n))
 
 
+def test_a_cone_gone_near_the_kept_tail_cuts_it_too():
+    cones, n = straight()
+    extra = np.vstack([cones, [[120.0, 6.5]]])  # a false positive 4.5 m beside the left side
+    solver = LaneSolver("rld")
+    first = solver.solve(extra, CAR, time_limit_s=5.0)
+    np.testing.assert_array_equal(first.left, np.arange(n))  # the lane never took it
+    pose = Pose(1.0, 0.0, 0.0)
+    lane = solver.solve(cones, pose, time_limit_s=5.0)  # the map lost it
+    assert lane.stats["chain"]["cut"] and lane.stats["chain"]["steps"] >= 1
+    _same(lane, solve_lane(cones, pose, time_limit_s=5.0))
+
+
 def test_a_pose_jump_forgets_the_chain():
     cones, _ = straight()
     solver = LaneSolver("rld")
