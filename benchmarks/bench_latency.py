@@ -17,19 +17,18 @@ import time
 
 import numpy as np
 
+from benchmarks.bench_incremental import _tracks, dataset_available
 from rld.api import LaneSolver
 from rld.simulation import simulate_lap
 from rld.solver import DEFAULT_TIME_LIMIT_S
-from rld.tracks import DATASET_TRACKS, find_dataset_dir, load_dataset_track
+from rld.tracks import DATASET_TRACKS
+
+__all__ = ["run", "to_markdown", "dataset_available", "TARGETS_MS"]
 
 #: Issue 40's targets, ms: median, p95, max.
 TARGETS_MS = (10.0, 25.0, 50.0)
 #: ``quick``: the first track, this many poses.
 QUICK_POSES = 20
-
-
-def dataset_available() -> bool:
-    return find_dataset_dir() is not None
 
 
 def run(methods=("rld", "rld-incremental", "clc"), range_m: float = 50.0, fp_rate: float = 0.3,
@@ -39,13 +38,9 @@ def run(methods=("rld", "rld-incremental", "clc"), range_m: float = 50.0, fp_rat
     latency (s), status, and the chained windows of an ``rld`` call (-1 for other methods)."""
     from tqdm import tqdm
 
-    folder = find_dataset_dir()
-    if folder is None:
-        raise FileNotFoundError("racetrack dataset not found (set RLD_DATASET_DIR or put it in "
-                                "../shared/data/fsd_racetrack_dataset)")
     ids = list(tracks)[:1] if quick else list(tracks)
-    laps = [simulate_lap(load_dataset_track(folder, k), range_m=range_m, fp_rate=fp_rate,
-                         seed=seed) for k in ids]
+    laps = [simulate_lap(track, range_m=range_m, fp_rate=fp_rate, seed=seed)
+            for track in _tracks(ids)]
     records = []
     for method in methods:
         for lap in laps:

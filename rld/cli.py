@@ -532,6 +532,17 @@ def _benchmark_module(name: str):
     raise UserError("benchmarks/ not found: run `rld bench` from a checkout of the repository")
 
 
+def _dataset_benchmark(name: str, command: str):
+    """``benchmarks.NAME`` (``_benchmark_module``), or ``None`` after saying that ``command``
+    is skipped because the racetrack dataset was not found."""
+    mod = _benchmark_module(name)
+    if not mod.dataset_available():
+        click.echo(f"{command}: skipped, the racetrack dataset was not found (set "
+                   "RLD_DATASET_DIR or put it in ../shared/data/fsd_racetrack_dataset)", err=True)
+        return None
+    return mod
+
+
 def _load_dataset_tracks(folder, numbers) -> list:
     """The dataset's tracks ``numbers`` in ``folder``; a missing or malformed file is a
     ``UserError`` naming it."""
@@ -882,10 +893,8 @@ def bench_incremental(range_m: float, fp_rates: list[float], every: int, track_i
     """Incremental RLD latency per map update and against the kept lane's length."""
     import shlex
 
-    mod = _benchmark_module("bench_incremental")
-    if not mod.dataset_available():
-        click.echo("rld bench incremental: skipped, the racetrack dataset was not found (set "
-                   "RLD_DATASET_DIR or put it in ../shared/data/fsd_racetrack_dataset)", err=True)
+    mod = _dataset_benchmark("bench_incremental", "rld bench incremental")
+    if mod is None:
         return
     try:
         records = mod.run(range_m=range_m, fp_rates=fp_rates, every=every, tracks=track_ids,
@@ -928,10 +937,8 @@ def bench_latency(methods: str, range_m: float, fp_rate: float, every: int,
     if unknown or not names:
         raise click.BadParameter(f"{unknown or methods!r}: use some of {', '.join(METHODS)}",
                                  param_hint="'--methods'")
-    mod = _benchmark_module("bench_latency")
-    if not mod.dataset_available():
-        click.echo("rld bench latency: skipped, the racetrack dataset was not found (set "
-                   "RLD_DATASET_DIR or put it in ../shared/data/fsd_racetrack_dataset)", err=True)
+    mod = _dataset_benchmark("bench_latency", "rld bench latency")
+    if mod is None:
         return
     try:
         records = mod.run(methods=names, range_m=range_m, fp_rate=fp_rate, every=every,

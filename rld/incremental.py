@@ -136,10 +136,12 @@ class IncrementalRld:
     def _jumped(self, pose: Pose) -> bool:
         return pose_jumped(pose, self.prev_pose)
 
-    def _match(self, points: np.ndarray, sides=None) -> tuple[np.ndarray, np.ndarray] | None:
-        """Each side's cones (positions; default the kept lane's) as indices into ``points``,
-        each within ``MATCH_TOLERANCE_M``; ``None`` when one is missing or two share a cone."""
-        tree = cKDTree(points)
+    def _match(self, points: np.ndarray, sides=None,
+               tree: cKDTree | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+        """Each side's cones (positions; default the kept lane's) as indices into ``points``
+        (``tree``: its k-d tree, if built), each within ``MATCH_TOLERANCE_M``; ``None`` when
+        one is missing or two share a cone."""
+        tree = cKDTree(points) if tree is None else tree
         out = []
         for xy in (self.left_xy, self.right_xy) if sides is None else sides:
             dist, idx = tree.query(xy, distance_upper_bound=MATCH_TOLERANCE_M)
@@ -402,7 +404,8 @@ class IncrementalRld:
         gone, a side does not join, or the joined lane fails a chain step's checks."""
         if pose_jumped(pose, kept.pose):
             return "pose jump"
-        matched = self._match(points, (kept.left_xy, kept.right_xy))
+        tree = cKDTree(points)
+        matched = self._match(points, (kept.left_xy, kept.right_xy), tree)
         if matched is None:
             return "a kept cone is gone"
         if kept.closed:
@@ -419,7 +422,7 @@ class IncrementalRld:
             # Else the loop, opened at the car, is joined as an open chain, which grows on.
         # Cones new since then, and cones gone since then: the map changed there.
         d, _ = cKDTree(kept.map_xy).query(points, distance_upper_bound=MATCH_TOLERANCE_M)
-        g, _ = cKDTree(points).query(kept.map_xy, distance_upper_bound=MATCH_TOLERANCE_M)
+        g, _ = tree.query(kept.map_xy, distance_upper_bound=MATCH_TOLERANCE_M)
         changed = np.vstack([points[~np.isfinite(d)], kept.map_xy[~np.isfinite(g)]])
         near_new = cKDTree(changed) if changed.shape[0] else None
         sides, cut = [], bool(kept.closed)  # an opened loop's end is tried again
@@ -471,8 +474,6 @@ class IncrementalRld:
         ``budget_s`` seconds. ``kept``: the last call's chain, re-attached first (``reattach``);
         once it is, the chain grows only for the call's first ``grow_s`` seconds. Without it
         the chain is stateless (``solve``'s kept lane is never touched)."""
-        if kept is None:
-            grow_s = None
         L, R = lane.left, lane.right
         self._colors = colors
         deadline = t0 + budget_s

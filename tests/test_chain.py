@@ -82,15 +82,20 @@ def test_the_chained_lane_is_the_whole_bend_cone_for_cone():
     np.testing.assert_array_equal(lane.right, np.arange(nl, nl + nr))
 
 
-def test_a_ring_closes_into_the_whole_loop():
-    # Two concentric circles about (0, 27): the car at the origin heading +x, inner ring left.
+def ring() -> tuple[np.ndarray, int]:
+    """Two concentric circles about (0, 27), radii 25 and 29 m, a cone about every 3.5 m: the
+    car at the origin heading +x, the inner ring on its left. Returns (cones: inner then
+    outer, inner count)."""
     sides = []
     for r in (25.0, 29.0):
         n = int(round(2 * math.pi * r / SPACING_M))
         t = np.arange(n) * 2 * math.pi / n + 0.5 / r
         sides.append(np.column_stack([r * np.sin(t), 27.0 - r * np.cos(t)]))
-    cones = np.vstack(sides)
-    nl = len(sides[0])
+    return np.vstack(sides), len(sides[0])
+
+
+def test_a_ring_closes_into_the_whole_loop():
+    cones, nl = ring()
     lane = solve_lane(cones, CAR, params=CHAINED, time_limit_s=5.0)
     assert lane.ok and lane.closed and lane.stats["chain"]["stop"] == "closed"
     # Each side is its whole ring, in order, from the cone nearest the car.
@@ -223,12 +228,7 @@ def test_a_pose_jump_forgets_the_chain():
 
 
 def test_a_kept_ring_stays_closed_and_runs_from_the_car():
-    sides = []
-    for r in (25.0, 29.0):
-        n = int(round(2 * math.pi * r / SPACING_M))
-        t = np.arange(n) * 2 * math.pi / n + 0.5 / r
-        sides.append(np.column_stack([r * np.sin(t), 27.0 - r * np.cos(t)]))
-    cones = np.vstack(sides)
+    cones, _ = ring()
     solver = LaneSolver("rld")
     assert solver.solve(cones, CAR, time_limit_s=5.0).closed
     a = 4.0 / 27.0  # 4 m on along the centre line
