@@ -32,6 +32,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from rld.backends import make_backend
+from rld.backends.base import BackendResult
 from rld.constraints import blocked_by_fixed, lane_is_feasible, start_mask
 from rld.program import build_program, cycle_cut, extract_paths, lane_cut
 from rld.types import Lane, LaneParams, LaneStatus, Pose
@@ -221,7 +222,7 @@ class RldModel:
         hint, n_hinted = self._hint(program)
         stats["warm_start_edges"] = n_hinted
         result = None
-        t_solve = time.perf_counter()  # the budget bounds the solves, not the model update
+        t_solve = time.perf_counter()  # for solve_time_s: the budget counts from t0 (build too)
         stats["lane_cut_rounds"] = 0
         verdicts: dict[tuple, bool] = {}  # each lane checked once
 
@@ -238,10 +239,11 @@ class RldModel:
             while True:
                 rejected = False
                 while True:
-                    remaining = budget - (time.perf_counter() - t_solve)
-                    if remaining <= 0 and result is not None:
+                    remaining = budget - (time.perf_counter() - t0)
+                    if remaining <= 0:  # the budget spent (by the build, or the last solve)
+                        result = result or BackendResult("timeout", None)
                         break
-                    result = self.backend.solve(program, max(remaining, 1e-3), hint)
+                    result = self.backend.solve(program, remaining, hint)
                     if result.x is None:
                         break
                     paths, cycles = _split(program, result.x)
@@ -261,7 +263,7 @@ class RldModel:
                 rejected = not feasible(pl, pr)
                 if (not rejected
                         or cuts >= MAX_LANE_CUT_ROUNDS
-                        or budget - (time.perf_counter() - t_solve) <= 0):
+                        or budget - (time.perf_counter() - t0) <= 0):
                     break
                 cuts += 1
                 stats["lane_cut_rounds"] += 1
@@ -272,7 +274,7 @@ class RldModel:
         no_lane = rejected if result.x is not None else result.status == "infeasible"
         heading_rows = (program.family == "heading") if HEADING_FALLBACK and no_lane else None
         if (heading_rows is not None and heading_rows.any()
-                and budget - (time.perf_counter() - t_solve) > 0):
+                and budget - (time.perf_counter() - t0) > 0):
             # Eq. 9 in a bend: the boundaries beside the car can turn more than
             # heading_tolerance_rad from the car's heading, and the row then leaves no lane at
             # all (or only lanes through rungs across the track, which the shared predicate

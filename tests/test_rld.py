@@ -326,6 +326,21 @@ def test_time_budget_gives_a_status_not_a_hang():
     assert lane.ok == (lane.left.size > 0)
 
 
+def test_the_budget_counts_the_model_build():
+    """``time_limit_s`` bounds the whole call: a budget the program's build has spent starts
+    no solve (a solver given 1 ms would overrun it by its own start-up) and says so."""
+    points, pose = instance(5, 20)
+    model = RldModel(LaneParams(max_windows=1), backend="cpsat")
+    calls = []
+    solve = model.backend.solve
+    model.backend.solve = lambda *a, **k: calls.append(a[1]) or solve(*a, **k)
+    lane = model.solve(points, pose, time_limit_s=1e-7)
+    assert lane.status is LaneStatus.TIMEOUT and not lane.ok and calls == []
+    lane = model.solve(points, pose, time_limit_s=5.0)
+    assert lane.ok and len(calls) >= 1
+    assert calls[0] < 5.0 - lane.stats["build_time_s"] + 1e-9  # what the build left
+
+
 def test_rld_lane_meets_the_shared_constraints():
     from rld.generator import generate_track
     from rld.simulation import simulate_lap
