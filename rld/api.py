@@ -73,7 +73,8 @@ class _RldMethod:
     up to ``params.max_windows - 1`` frontier windows chained on its end within the call's
     budget (``rld.incremental.IncrementalRld.chain``; not in the sided form). A reused solver
     keeps its chain: a later call re-solves the car's window, re-attaches the kept chain where
-    they join and grows it for at most ``KEPT_GROWTH_S`` (a whole chain where they do not)."""
+    they join and grows it for at most ``KEPT_GROWTH_S`` (a whole chain where they do not).
+    The lane is returned from the car forward (``IncrementalRld.forward``)."""
 
     backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy", "auto")
     rankers = False
@@ -107,8 +108,8 @@ class _RldMethod:
         lane = self.chainer.chain(points, pose, lane, t0, budget,
                                   int(self.model.params.max_windows), colors=colors,
                                   kept=kept, grow_s=KEPT_GROWTH_S)
-        self.kept = self.chainer.keep(points, pose, lane)
-        return lane
+        self.kept = self.chainer.keep(points, pose, lane)  # the whole chain, to re-attach
+        return self.chainer.forward(points, pose, lane, colors)
 
 
 class _RldSidedMethod(_RldMethod):

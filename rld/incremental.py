@@ -466,6 +466,24 @@ class IncrementalRld:
                          pose, bool(lane.closed), lane.status is LaneStatus.OPTIMAL,
                          lane.stats["chain"]["stop"])
 
+    def forward(self, points: np.ndarray, pose: Pose, lane: Lane,
+                colors: np.ndarray | None = None) -> Lane:
+        """``lane`` from the car forward: each side of an open lane from ``_start_index`` (the
+        protocol's convention for the truth, as ``rld-incremental`` returns its lane), its
+        cost recomputed; a closed lane, or one a side of which would keep fewer than two
+        cones, as it is. ``stats["chain"]["behind"]`` counts the cones dropped."""
+        if not lane.ok or lane.closed:
+            return lane
+        j = [self._start_index(points, pose, S, closed=False) for S in (lane.left, lane.right)]
+        if not any(j) or min(lane.left.size - j[0], lane.right.size - j[1]) < 2:
+            return lane
+        L, R = lane.left[j[0]:], lane.right[j[1]:]
+        stats = dict(lane.stats)
+        stats["chain"] = dict(stats.get("chain", {}), behind=int(j[0] + j[1]))
+        return Lane(cones=points, left=L, right=R, status=lane.status, message=lane.message,
+                    cost=lane_cost(points, L, R, pose, self.params, colors=colors),
+                    stats=stats)
+
     def chain(self, points: np.ndarray, pose: Pose, lane: Lane, t0: float, budget_s: float,
               max_windows: int, colors: np.ndarray | None = None,
               kept: KeptChain | None = None, grow_s: float | None = None) -> Lane:

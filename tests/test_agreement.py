@@ -20,8 +20,9 @@ What holds today, and what these tests assert:
   horizon is the whole lane, not RLD's 20-cone window, and agreement fell to 73 of 105
   (generated; 95 of 105 with the single window, issue 40) and 39 of 72 (dataset): of the 65
   disagreements, CLC alone diverges in 52 (past 20 m in all but one), both diverge in 12,
-  and in one RLD's loop is the truth while CLC's skips a cone at its seam. The floors
-  sit at most 2 points under those figures, so that a regression in either method, or in the
+  and in one RLD's loop is the truth while CLC's skips a cone at its seam. Measured
+  2026-12-07 since RLD returns its lane from the car forward: 75 of 105 and 41 of 72. The
+  floors sit at most 2 points under those figures, so that a regression in either method, or in the
   conventions they share, fails here with the poses and a picture of each disagreement.
 """
 
@@ -102,14 +103,14 @@ def test_rld_and_clc_agree_on_clean_generated_tracks(tmp_path):
     tracks = [generate_track(100 + s) for s in range(4)]
     n, disagree, contradict = _compare(tracks, every=10, folder=tmp_path)
     assert n == 105
-    _check(n, disagree, contradict, floor=0.67)
+    _check(n, disagree, contradict, floor=0.69)
 
 
 def test_rld_and_clc_agree_on_the_dataset_tracks(dataset_dir, tmp_path):
     tracks = [load_dataset_track(dataset_dir, k) for k in (1, 2, 3, 4, 6, 7)]
     n, disagree, contradict = _compare(tracks, every=20, folder=tmp_path)
     assert n == 72
-    _check(n, disagree, contradict, floor=0.53)
+    _check(n, disagree, contradict, floor=0.55)
 
 
 @pytest.mark.parametrize("swap", ["sides", "order"])

@@ -80,3 +80,20 @@ def test_kept_chain_table_pairs_each_variant_with_the_stateless_chain():
     # > 1 m: the same pose; > 0.5 m: pose 1 no longer, pose 3 now: 2 of 4 both ways, +0.
     assert lines[3].startswith("| kept 0.05 s | 4 | 25.00 (+0.00 [+0.00, +0.00]) | 50.00 (+0.00")
     assert "| 10.0 / 20.0 | 10 / 10 / 10 | 50 m 10%: 25.00 / 50.00, 10 |" in lines[3]
+
+
+def test_forward_table_counts_the_poses_the_view_fixed_and_broke():
+    from benchmarks import bench_forward as bf
+
+    def rec(whole, forward):
+        return dict(seed=1, range_m=50.0, fp_rate=0.3, track=1, whole_m=whole, forward_m=forward,
+                    whole_length_m=30.0, forward_length_m=28.0)
+
+    recs = [rec(1.5, 0.2), rec(0.7, 0.7), rec(0.1, 0.6)]
+    assert bf.lap_interval(recs, 1.0) == pytest.approx((-100 / 3, -100 / 3, -100 / 3))
+    assert bf.lap_interval(recs, 0.5) == pytest.approx((0.0, 0.0, 0.0))
+    lines = bf.table(recs).splitlines()
+    # > 1 m: one pose fixed, none broken; > 0.5 m: one fixed (1.5), one broken (0.1 -> 0.6).
+    assert lines[2] == ("| all | 3 | 33.33 / 66.67 | 0.00 / 66.67 | 1 / 0; 1 / 1 | -33.33 "
+                        "[-33.33, -33.33], +0.00 [+0.00, +0.00] | 30.0 / 28.0 |")
+    assert lines[3].startswith("| 50 m 30% | 3 | 33.33 / 66.67 |")

@@ -188,7 +188,9 @@ def test_a_reused_solver_keeps_its_chain_and_returns_the_stateless_lane():
     assert chain["kept_cones"] == 2 * n - 20 and chain["steps"] == 0 and not chain["cut"]
     assert chain["stop"] == first.stats["chain"]["stop"]
     _same(lane, solve_lane(cones, pose, time_limit_s=5.0))
-    np.testing.assert_array_equal(lane.left, np.arange(n))
+    # From the car forward: the first cone a side (x = 0.5 m) is behind the car at x = 2 m.
+    np.testing.assert_array_equal(lane.left, np.arange(1, n))
+    assert chain["behind"] == 2 and solver._impl.kept.left_xy.shape[0] == n  # kept whole
 
 
 def test_new_cones_near_the_kept_tail_cut_it_and_the_chain_grows_on():
@@ -202,7 +204,7 @@ def test_new_cones_near_the_kept_tail_cut_it_and_the_chain_grows_on():
     chain = lane.stats["chain"]
     assert chain["cut"] and chain["steps"] >= 1 and 0 < chain["kept_cones"] < 2 * (n - 6) - 20
     _same(lane, solve_lane(cones, pose, time_limit_s=5.0))
-    np.testing.assert_array_equal(lane.right, np.arange(n, 2 * n))
+    np.testing.assert_array_equal(lane.right, np.arange(n + 1, 2 * n))  # from the car forward
 
 
 def test_a_cone_gone_near_the_kept_tail_cuts_it_too():
