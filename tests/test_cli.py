@@ -231,14 +231,15 @@ def test_solve_prints_the_maps_ids_and_writes_json(tmp_path):
     out = tmp_path / "lane.json"
     result = CliRunner().invoke(main, ["solve", str(path), "--pose", "1,0,0", "--out", str(out)])
     assert result.exit_code == 0, result.output
-    assert "ids: [110, 111, 112" in result.output and "ids: [140, 141, 142" in result.output
+    # The lane from the car forward: the first cone a side (x = 0) is behind the car at x = 1.
+    assert "ids: [111, 112, 113" in result.output and "ids: [141, 142, 143" in result.output
     doc = json.loads(out.read_text())
     ids = {int(k): v for k, v in yaml.safe_load(path.read_text()).items()}
     assert doc["method"] == "rld" and doc["status"] in ("OPTIMAL", "FEASIBLE") and doc["ok"]
     assert doc["closed"] is False and doc["message"] == "" and doc["pose"] == [1.0, 0.0, 0.0]
     for side, expected in (("left", _LEFT_IDS), ("right", _RIGHT_IDS)):
         assert doc[side]["ids"] and set(doc[side]["ids"]) <= set(ids)
-        assert doc[side]["ids"] == expected[:len(doc[side]["ids"])]
+        assert doc[side]["ids"] == expected[1:1 + len(doc[side]["ids"])]
         assert doc[side]["xy"] == [ids[i] for i in doc[side]["ids"]]
 
 

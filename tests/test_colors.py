@@ -106,8 +106,9 @@ def test_no_class_naming_a_side_is_no_colour():
     lane = solve_lane(CONES, POSE, method="rld", colors=colors, time_limit_s=5)
     p = LaneSolver("rld").params
     assert (lane.left.tolist(), lane.right.tolist()) == (plain.left.tolist(), plain.right.tolist())
-    used = lane.left.size + lane.right.size
-    assert lane.cost == pytest.approx(plain.cost + p.w_color * p.color_unknown * (used - 1))
+    unknown = sum(colors[i] == "unknown" for i in (*lane.left, *lane.right))
+    assert unknown == lane.left.size + lane.right.size - int(0 in lane.left)
+    assert lane.cost == pytest.approx(plain.cost + p.w_color * p.color_unknown * unknown)
 
 
 def test_the_public_integers_mean_classes_not_sides():

@@ -608,14 +608,16 @@ def test_heading_row_is_dropped_when_no_lane_meets_it(monkeypatch):
     lane = solve_lane(points, pose, method="rld")
     assert lane.ok and lane.stats["heading_relaxed"]
     assert "heading row" in lane.message
-    assert lane.left.tolist() == list(range(6)) and lane.right.tolist() == list(range(6, 12))
+    # From the car forward: the right side's first cone lies behind the car's heading.
+    assert lane.left.tolist() == list(range(6)) and lane.right.tolist() == list(range(7, 12))
 
 
 def test_heading_row_is_kept_when_a_lane_meets_it():
     points, _ = _bend_beside_the_car()
     lane = solve_lane(points, Pose(0.5, 0.0, 0.0), method="rld")
     assert lane.ok and "heading_relaxed" not in lane.stats
-    assert lane.left.tolist() == list(range(6)) and lane.right.tolist() == list(range(6, 12))
+    # From the car forward: both sides' first cones (x = 0) lie behind the car at x = 0.5.
+    assert lane.left.tolist() == list(range(1, 6)) and lane.right.tolist() == list(range(7, 12))
 
 
 def test_a_fixed_start_drops_its_backward_first_edges():
