@@ -75,24 +75,14 @@ def run(seeds=(1, 2), ranges=(30.0, 50.0), fp_rates=(0.0, 0.3, 0.5), every: int 
     return [r for part in parts for r in part]
 
 
-def lap_interval(records: list[dict], d: float, draws: int = 2000,
-                 seed: int = 0) -> tuple[float, float, float]:
-    """Forward minus whole, points of the critical rate at ``d`` metres, with a 95 % interval
-    resampling laps (seed, range, rate, track)."""
-    laps: dict[tuple, list[int]] = {}
-    for r in records:
-        key = (r["seed"], r["range_m"], r["fp_rate"], r["track"])
-        laps.setdefault(key, [0, 0, 0])
-        laps[key][0] += int(r["forward_m"] > d)
-        laps[key][1] += int(r["whole_m"] > d)
-        laps[key][2] += 1
-    counts = np.array(list(laps.values()), dtype=float)
-    point = 100.0 * (counts[:, 0].sum() - counts[:, 1].sum()) / counts[:, 2].sum()
-    rng = np.random.default_rng(seed)
-    picks = counts[rng.integers(0, len(counts), size=(draws, len(counts)))]
-    diffs = 100.0 * (picks[..., 0].sum(1) - picks[..., 1].sum(1)) / picks[..., 2].sum(1)
-    lo, hi = np.percentile(diffs, [2.5, 97.5])
-    return float(point), float(lo), float(hi)
+def lap_interval(records: list[dict], d: float) -> tuple[float, float, float]:
+    """Forward minus whole, points of the critical rate at ``d`` metres, with the project's
+    paired 95 % lap-bootstrap interval (``bench_color_weights.paired_interval``)."""
+    from benchmarks.bench_color_weights import paired_interval
+
+    whole = [dict(r, deviation_m=r["whole_m"]) for r in records]
+    forward = [dict(r, deviation_m=r["forward_m"]) for r in records]
+    return paired_interval(whole, forward, d)
 
 
 def table(records: list[dict]) -> str:

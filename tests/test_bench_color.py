@@ -85,11 +85,11 @@ def test_kept_chain_table_pairs_each_variant_with_the_stateless_chain():
 def test_forward_table_counts_the_poses_the_view_fixed_and_broke():
     from benchmarks import bench_forward as bf
 
-    def rec(whole, forward):
-        return dict(seed=1, range_m=50.0, fp_rate=0.3, track=1, whole_m=whole, forward_m=forward,
-                    whole_length_m=30.0, forward_length_m=28.0)
+    def rec(pose, whole, forward):
+        return dict(seed=1, range_m=50.0, fp_rate=0.3, track=1, pose=pose, whole_m=whole,
+                    forward_m=forward, whole_length_m=30.0, forward_length_m=28.0)
 
-    recs = [rec(1.5, 0.2), rec(0.7, 0.7), rec(0.1, 0.6)]
+    recs = [rec(0, 1.5, 0.2), rec(2, 0.7, 0.7), rec(4, 0.1, 0.6)]
     assert bf.lap_interval(recs, 1.0) == pytest.approx((-100 / 3, -100 / 3, -100 / 3))
     assert bf.lap_interval(recs, 0.5) == pytest.approx((0.0, 0.0, 0.0))
     lines = bf.table(recs).splitlines()
