@@ -1003,6 +1003,25 @@ def bench_clc_failures(ranges: list[float], fp_rates: list[float], seeds: list[i
     _emit(mod.to_markdown(results), out)
 
 
+@bench.command("paired")
+@click.argument("base", type=click.Path(exists=True, file_okay=False))
+@click.argument("other", type=click.Path(exists=True, file_okay=False))
+@click.option("--method", default="rld", show_default=True,
+              help="The method whose records are compared (its name in the records).")
+@click.option("--out", default=None, metavar="FILE", callback=_out_file, show_default="none",
+              help="Also write the Markdown table to this file.")
+def bench_paired(base: str, other: str, method: str, out: str | None) -> None:
+    """Two `rld eval --out` folders compared pose by pose: geometric critical rates, poses
+    fixed and broken, the paired difference with its 95 % interval, lane lengths
+    (benchmarks/bench_paired.py; DESIGN.md, "Choosing and reporting")."""
+    mod = _benchmark_module("bench_paired")
+    try:
+        text = mod.table(mod.load_records(base, method), mod.load_records(other, method))
+    except (FileNotFoundError, ValueError) as exc:
+        raise UserError(str(exc)) from exc
+    _emit(text, out)
+
+
 def _parse_cells(cells: str) -> list[tuple[float, float]]:
     """``--cells`` "30:0.1,50:0.3" -> [(30.0, 0.1), (50.0, 0.3)] (range in metres > 0, rate
     in [0, 1)); a usage error otherwise."""
