@@ -21,6 +21,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from clc import search_kernels as sk
 from clc.search import SearchGraph, SearchResult, closable, enumerate_candidates
@@ -35,15 +36,16 @@ from rld.costs import (
     width_second_differences,
     within_radius,
 )
+from rld.insertion import boundary_edges, insert_cones
 from rld.types import LaneParams, Pose
 
 __all__ = ["Refinement", "DEFAULT", "refine", "dive_cost", "dive_costs", "jog_positions",
            "path_ahead", "contested_dives", "claim_dive", "dive_at", "pair_drops", "trim_behind",
-           "drop_ring_join", "ring_join_change", "COUNTS"]
+           "drop_ring_join", "ring_join_change", "far_insertions", "COUNTS"]
 
 #: What ``refine`` counts, as ``lane.stats`` keys.
 COUNTS = ("dives", "dive_rounds", "short_lane_rounds", "jog_dives", "pair_drops", "dropped",
-          "trimmed_behind")
+          "trimmed_behind", "inserted")
 
 
 @dataclass(frozen=True)
@@ -77,6 +79,9 @@ class Refinement:
     trim_behind: bool = True
     """Return an open lane from each boundary's first cone not behind the car
     (``trim_behind``)."""
+    far_insertions: bool = True
+    """Insert the cones the lane skips beyond ``reach_m`` along each boundary, where RLD's
+    objective prefers them (``far_insertions``; the judge never looks there)."""
     judge_color: bool = True
     """The judge's objective includes ``LaneParams.w_color`` times the colour cost when a call
     has colours (RLD's, as the rest of the judge). Chosen: docs/tuning.md#judge_color."""
@@ -110,6 +115,9 @@ def refine(points: np.ndarray, pose: Pose, params: LaneParams, res: SearchResult
                                                         right)
     if not closed and edits.trim_behind:
         left, right, counts["trimmed_behind"] = trim_behind(points, pose, params, left, right)
+    if edits.far_insertions:
+        left, right, counts["inserted"] = far_insertions(points, params, left, right,
+                                                         bool(closed), edits.reach_m, colors)
     return (left, right, bool(closed), value), counts, iterations, cut
 
 
@@ -411,6 +419,36 @@ def trim_behind(points: np.ndarray, pose: Pose, params: LaneParams, left: np.nda
         if lane_is_feasible(points[trial[0]], points[trial[1]], params):
             return trial[0], trial[1], sum(k)
     return paths[0], paths[1], 0
+
+
+def far_insertions(points: np.ndarray, params: LaneParams, left: np.ndarray, right: np.ndarray,
+                   closed: bool, reach_m: float, colors: np.ndarray | None = None
+                   ) -> tuple[np.ndarray, np.ndarray, int]:
+    """The lane with the cones it skips inserted (``rld.insertion.insert_cones``: where RLD's
+    objective drops) into its edges that begin ``reach_m`` or more along a boundary from its
+    first cone, out of the judge's and the geometric rule's reach. Returns (left, right,
+    insertions)."""
+    paths = [np.asarray(left, dtype=np.int64), np.asarray(right, dtype=np.int64)]
+
+    def arc_from(e: np.ndarray) -> np.ndarray:  # arc length from the first cone to each edge
+        lengths = np.hypot(*(points[e[:, 1]] - points[e[:, 0]]).T)
+        return np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
+
+    far = [boundary_edges(p, closed) for p in paths]
+    far = np.vstack([e[arc_from(e) >= reach_m] for e in far if e.shape[0]])
+    if far.shape[0] == 0:
+        return paths[0], paths[1], 0
+    a, b = points[far[:, 0]], points[far[:, 1]]
+    radius = 0.5 * np.hypot(*(b - a).T) + 0.5 * params.min_width_m
+    near = cKDTree(points).query_ball_point(0.5 * (a + b), radius)
+    cand = np.setdiff1d(np.unique(np.concatenate([np.asarray(q, dtype=np.int64)
+                                                  for q in near])),
+                        np.concatenate(paths))
+    if cand.size == 0:
+        return paths[0], paths[1], 0
+    (left, right), n = insert_cones(points, paths, cand, params, closed, colors,
+                                    allowed=lambda side, e: arc_from(e) >= reach_m)
+    return left, right, n
 
 
 def drop_ring_join(points: np.ndarray, pose: Pose, params: LaneParams, graph: SearchGraph,

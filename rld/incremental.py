@@ -13,7 +13,6 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
-from rld import geometry as geo
 from rld.constraints import (
     blocked_by_fixed,
     candidate_edges,
@@ -21,7 +20,9 @@ from rld.constraints import (
     lane_is_feasible,
     width_conflicts,
 )
-from rld.costs import boundary_color_cost, lane_cost
+from rld.costs import lane_cost
+from rld.insertion import boundary_edges as _edges
+from rld.insertion import insert_cones
 from rld.solver import MATCH_TOLERANCE_M, RldModel
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
@@ -81,11 +82,6 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / max(float(np.hypot(v[0], v[1])), 1e-9)
 
 
-def _edges(seq: np.ndarray, closed: bool = False) -> np.ndarray:
-    """The (k, 2) edges of a boundary, an index sequence; with the closing edge when
-    ``closed``."""
-    seq = np.r_[seq, seq[:1]] if closed and seq.size else seq
-    return np.column_stack([seq[:-1], seq[1:]])
 
 
 class IncrementalRld:
@@ -225,72 +221,20 @@ class IncrementalRld:
         return None, self.max_rollbacks + 1, False
 
     def _insert_new_cones(self, points, L, R, prev_map) -> tuple[np.ndarray, np.ndarray, int]:
-        """Late insertion: a cone that entered the map since the last call and lies beside a
-        kept edge (a, b), between its ends and less than half the minimum width from it,
-        joins the lane as a -> c -> b when that lowers the RLD objective (the shared
-        ``lane_cost`` over the edges and turns it changes) and breaks no constraint (turn
-        limit, and the shared crossing and width families against the rest of the lane).
-        A cone the perception saw late (in a hairpin, say) is then not skipped for good
-        once the frontier has moved on. With colours the objective counts the colour cost
-        (``rld.costs.boundary_color_cost``) too. Returns (L, R, insertions)."""
+        """Late insertion: each cone that entered the map since the last call joins a kept
+        edge when that lowers the RLD objective (``rld.insertion.insert_cones``, the shared
+        rule), so a cone the perception saw late (in a hairpin, say) is not skipped for good
+        once the frontier has moved on. Returns (L, R, insertions)."""
         if prev_map is None or prev_map.shape[0] == 0:
             return L, R, 0
-        p = self.params
         lane = np.union1d(L, R)
         d, _ = cKDTree(prev_map).query(points, distance_upper_bound=MATCH_TOLERANCE_M)
         new = np.setdiff1d(np.flatnonzero(~np.isfinite(d)), lane)
         if new.size == 0:
             return L, R, 0
-        sides = [L.copy(), R.copy()]
-        count = 0
-        for c in new:
-            per_side = [_edges(S, self.closed) for S in sides]
-            lane_edges = np.vstack(per_side)
-            best = None
-            for s_i, (S, e) in enumerate(zip(sides, per_side, strict=True)):
-                a_xy, b_xy = points[e[:, 0]], points[e[:, 1]]
-                t = geo.segment_parameter(points[c], a_xy, b_xy)
-                lat = geo.point_segment_distance(points[c], a_xy, b_xy)
-                for i in np.flatnonzero((t > 0) & (t < 1) & (lat < p.min_width_m / 2)):
-                    delta = self._insertion_delta(points, S, int(i), int(c), lane_edges)
-                    if delta is not None and (best is None or delta < best[0]):
-                        best = (delta, s_i, int(i))
-            if best is not None and best[0] < -1e-9:
-                _, s_i, i = best
-                sides[s_i] = np.insert(sides[s_i], i + 1, c)
-                count += 1
-        return sides[0], sides[1], count
-
-    def _insertion_delta(self, points, S, i, c, lane_edges) -> float | None:
-        """The objective change of inserting cone ``c`` after position ``i`` of boundary ``S``,
-        or None when the insertion breaks a constraint; ``lane_edges``: the whole lane's."""
-        p = self.params
-        n = S.size
-        idx = [(i + k) % n if self.closed else i + k for k in (-1, 0, 1, 2)]
-        idx = [j for j in idx if 0 <= j < n] if not self.closed else idx
-        local = S[idx]
-        pos = int(np.flatnonzero(local == S[i])[0])
-        with_c = np.insert(local, pos + 1, c)
-        turns = geo.polyline_turn_angles(points[with_c])
-        if np.any(np.abs(turns) > p.max_turn_angle_rad):
-            return None
-        a, b = int(S[i]), int(S[(i + 1) % n])
-        same = np.all(np.sort(lane_edges, axis=1) == sorted((a, b)), axis=1)
-        if blocked_by_fixed(points, np.array([[a, c], [c, b]]), lane_edges[~same],
-                            p.min_width_m).any():
-            return None
-        pose = Pose(0.0, 0.0, 0.0)  # no heading term: the pose does not enter the cost
-        delta = lane_cost(points, with_c, [], pose, p, heading=False) - \
-            lane_cost(points, local, [], pose, p, heading=False)
-        if self._colors is not None:
-            # The colour cost's edge and skip terms that the insertion changes; the window's
-            # ends are no boundary ends (a start radius of -1 m: no start term).
-            delta += p.w_color * (
-                boundary_color_cost(points, self._colors, with_c, pose, -1.0,
-                                    unknown=p.color_unknown)
-                - boundary_color_cost(points, self._colors, local, pose, -1.0,
-                                      unknown=p.color_unknown))
-        return delta
+        (L, R), count = insert_cones(points, (L, R), new, self.params, self.closed,
+                                     self._colors)
+        return L, R, count
 
     def _kept_edges(self, points, kl, kr, window) -> np.ndarray:
         """The kept lane's edges (both sides, up to the junctions) that come near the frontier

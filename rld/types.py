@@ -264,7 +264,7 @@ class LaneParams:
     """Cones at most this far apart, metres centre to centre, are one cone, merged before any
     method runs (``rld.dedup``); 0 turns merging off. Source: the rules (a small cone's base is
     0.228 m wide, so two cones cannot stand closer)."""
-    window_behind_m: float = 2.0
+    window_behind_m: float = 4.0
     """How far behind the car, metres along its heading, a cone may lie and still enter RLD's
     window; the cones beside the car must stay in for the lane to start there (at 0 some drop out).
     Chosen by measurement: docs/tuning.md#window_behind_m."""

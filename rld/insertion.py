@@ -1,0 +1,98 @@
+"""Cone insertion into a found lane: a cone beside an edge (a, b) of a boundary joins it as
+a -> c -> b when that lowers RLD's objective (eq. 29, the shared ``lane_cost``) and breaks no
+constraint. The one home of the rule for the incremental solver's late insertions
+(``rld.incremental``) and CLC's far insertions (``clc.refine``); ours, in neither paper.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from rld import geometry as geo
+from rld.constraints import blocked_by_fixed
+from rld.costs import boundary_color_cost, lane_cost
+from rld.types import LaneParams, Pose
+
+__all__ = ["boundary_edges", "insertion_delta", "insert_cones"]
+
+#: Any pose: the objective changes the insertion makes carry no heading term.
+_NO_POSE = Pose(0.0, 0.0, 0.0)
+
+
+def boundary_edges(seq: np.ndarray, closed: bool = False) -> np.ndarray:
+    """The edges (k, 2) of a boundary ``seq`` (cone indices in order), with the closing edge
+    when ``closed``."""
+    seq = np.asarray(seq, dtype=np.int64)
+    seq = np.r_[seq, seq[:1]] if closed and seq.size else seq
+    return np.column_stack([seq[:-1], seq[1:]])
+
+
+def insertion_delta(points: np.ndarray, S: np.ndarray, i: int, c: int, lane_edges: np.ndarray,
+                    params: LaneParams, closed: bool = False,
+                    colors: np.ndarray | None = None) -> float | None:
+    """The objective change of inserting cone ``c`` after position ``i`` of boundary ``S`` (the
+    edges and turns it changes; with ``colors`` the colour cost's edge and skip terms too), or
+    None when it breaks the turn limit or comes nearer than ``min_width_m`` to another edge
+    of ``lane_edges`` (the whole lane's) or crosses one."""
+    p = params
+    n = S.size
+    idx = [(i + k) % n if closed else i + k for k in (-1, 0, 1, 2)]
+    idx = idx if closed else [j for j in idx if 0 <= j < n]
+    local = S[idx]
+    pos = int(np.flatnonzero(local == S[i])[0])
+    with_c = np.insert(local, pos + 1, c)
+    turns = geo.polyline_turn_angles(points[with_c])
+    if np.any(np.abs(turns) > p.max_turn_angle_rad):
+        return None
+    a, b = int(S[i]), int(S[(i + 1) % n])
+    same = np.all(np.sort(lane_edges, axis=1) == sorted((a, b)), axis=1)
+    if blocked_by_fixed(points, np.array([[a, c], [c, b]]), lane_edges[~same],
+                        p.min_width_m).any():
+        return None
+    delta = lane_cost(points, with_c, [], _NO_POSE, p, heading=False) - \
+        lane_cost(points, local, [], _NO_POSE, p, heading=False)
+    if colors is not None:
+        # The window's ends are no boundary ends (a start radius of -1 m: no start term).
+        delta += p.w_color * (
+            boundary_color_cost(points, colors, with_c, _NO_POSE, -1.0, unknown=p.color_unknown)
+            - boundary_color_cost(points, colors, local, _NO_POSE, -1.0,
+                                  unknown=p.color_unknown))
+    return delta
+
+
+def insert_cones(points: np.ndarray, sides: Sequence[np.ndarray], candidates: np.ndarray,
+                 params: LaneParams, closed: bool = False, colors: np.ndarray | None = None,
+                 allowed=None) -> tuple[list[np.ndarray], int]:
+    """Each cone of ``candidates`` in turn joins the edge of ``sides`` (left, right) where
+    inserting it lowers the objective most (``insertion_delta``), if any: an edge whose foot
+    of the cone lies between its ends, less than half the minimum width from it.
+    ``allowed(side, edges)``: a boolean mask of the edges that may take a cone (default all).
+    Returns (the sides, insertions)."""
+    sides = [np.asarray(S, dtype=np.int64).copy() for S in sides]
+    half_width = params.min_width_m / 2
+    count = 0
+    for c in np.asarray(candidates, dtype=np.int64):
+        per_side = [boundary_edges(S, closed) for S in sides]
+        lane_edges = np.vstack(per_side)
+        best = None
+        for s_i, (S, e) in enumerate(zip(sides, per_side, strict=True)):
+            if e.shape[0] == 0:
+                continue
+            a_xy, b_xy = points[e[:, 0]], points[e[:, 1]]
+            t = geo.segment_parameter(points[c], a_xy, b_xy)
+            ok = (t > 0) & (t < 1) & (geo.point_segment_distance(points[c], a_xy, b_xy)
+                                       < half_width)
+            if allowed is not None:
+                ok &= allowed(s_i, e)
+            for i in np.flatnonzero(ok):
+                delta = insertion_delta(points, S, int(i), int(c), lane_edges, params, closed,
+                                        colors)
+                if delta is not None and (best is None or delta < best[0]):
+                    best = (delta, s_i, int(i))
+        if best is not None and best[0] < -1e-9:
+            _, s_i, i = best
+            sides[s_i] = np.insert(sides[s_i], i + 1, c)
+            count += 1
+    return sides, count
