@@ -7,10 +7,12 @@ beyond it, which under it_max it never does. ``refine`` takes the ranked winner 
 the next-vertex decider, the width jogs, every choice of a lane that stops short) and offers the
 lane without one cone of a close pair; the *judge* (``dive_cost``: RLD's eq. 29 within the
 reach, plus the width roughness) keeps the cheapest lane. It then closes the winner (IV-E), drops
-a closed lane's false join cone, and trims an open lane's cones behind the car. Every part
-is there because switching it off alone raised a geometric critical rate on the choosing and
-the reporting sets (docs/ablation.md); ``Refinement`` switches them, ``refine=None`` in
-``ClcModel`` leaves the paper's pipeline.
+a closed lane's false join cone, trims an open lane's cones behind the car, and inserts the
+cones it skips beyond the reach. Every part but the last is there because switching it off alone
+raised a geometric critical rate on the choosing and the reporting sets (docs/ablation.md); the
+far insertions lie beyond that rule's reach by construction and serve the index rule and the
+agreement with RLD (docs/clc.md). ``Refinement`` switches them, ``refine=None`` in ``ClcModel``
+leaves the paper's pipeline.
 """
 
 from __future__ import annotations

@@ -235,7 +235,8 @@ def _lane_edges(left, right):
 def test_solve_with_fixed_lane_never_uses_a_blocked_edge(sided):
     p = LaneParams()
     checked = changed = 0
-    for seed, fp_rate, pose_k in ((100, 0.2, 30), (100, 0.0, 150), (3, 0.2, 80), (1, 0.2, 200)):
+    for seed, fp_rate, pose_k in ((100, 0.2, 30), (100, 0.0, 150), (3, 0.2, 80), (1, 0.2, 200),
+                                  (6, 0.2, 40)):
         f = simulate_lap(generate_track(seed), range_m=50.0, fp_rate=fp_rate, seed=0).frame(
             pose_k)
         pts = np.ascontiguousarray(f.cones, dtype=np.float64)
