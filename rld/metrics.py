@@ -21,6 +21,7 @@ from shapely.geometry import Polygon
 
 from rld import geometry as geo
 from rld.simulation import Frame
+from rld.types import Pose
 
 __all__ = [
     "CATEGORIES",
@@ -56,6 +57,7 @@ __all__ = [
     "stability_ratio",
     "side_agreement",
     "lanes_agree",
+    "lanes_identical",
 ]
 
 CATEGORIES = ("gt", "near_gt", "too_short", "diverging_ge20", "diverging_lt20", "failed")
@@ -703,6 +705,31 @@ def side_agreement(a: np.ndarray, b: np.ndarray) -> int:
         return -1
     n = min(len(a), len(b))
     return n if a[:n] == b[:n] else -1
+
+
+def lanes_identical(lane_a, lane_b, pose: Pose) -> bool:
+    """Whether two ``Lane``\\ s on the same map are the same lane cone for cone: both found,
+    both open or both closed; open sides equal from each side's first cone not behind the car
+    (``geometry.leading_behind``) to its end, closed sides as sets of edges. Stricter than
+    ``lanes_agree``: a lane cut short, or no lane against no lane, is not the same lane."""
+    if not (lane_a.ok and lane_b.ok) or bool(lane_a.closed) != bool(lane_b.closed):
+        return False
+    for x, y in ((lane_a.left, lane_b.left), (lane_a.right, lane_b.right)):
+        x, y = np.asarray(x, dtype=np.int64), np.asarray(y, dtype=np.int64)
+        if lane_a.closed:
+            if _edge_set(x) != _edge_set(y):
+                return False
+            continue
+        jx = geo.leading_behind(lane_a.cones[x], pose.xy, pose.heading, keep=0)
+        jy = geo.leading_behind(lane_b.cones[y], pose.xy, pose.heading, keep=0)
+        if not np.array_equal(x[jx:], y[jy:]):
+            return False
+    return True
+
+
+def _edge_set(loop: np.ndarray) -> set[tuple[int, int]]:
+    s = [int(v) for v in loop]
+    return {tuple(sorted(e)) for e in zip(s, s[1:] + s[:1], strict=True)}
 
 
 def lanes_agree(lane_a, lane_b, min_common: int = 2) -> bool:

@@ -33,7 +33,7 @@ from scipy.spatial import cKDTree
 
 from rld.backends import make_backend
 from rld.backends.base import BackendResult
-from rld.constraints import blocked_by_fixed, lane_is_feasible, start_mask
+from rld.constraints import blocked_by_fixed, first_edges_ahead, lane_is_feasible, start_mask
 from rld.program import build_program, cycle_cut, extract_paths, lane_cut
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
@@ -234,7 +234,12 @@ class RldModel:
         def feasible(lt: list[int], rt: list[int]) -> bool:
             key = (tuple(lt), tuple(rt))
             if key not in verdicts:
-                verdicts[key] = lane_is_feasible(sub[lt], sub[rt], self.params, max_width=False)
+                # The shared predicate, and each boundary leaving its first cone forward
+                # (CLC's first-edge rule): a path from a cone beside the car back to one behind
+                # it is no boundary (the window holds cones 4 m behind the car).
+                verdicts[key] = lane_is_feasible(sub[lt], sub[rt], self.params,
+                                                 max_width=False) and first_edges_ahead(
+                    sub[lt], sub[rt], pose, self.params.max_turn_angle_rad)
             return verdicts[key]
 
         def solve_loop(result):

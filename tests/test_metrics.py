@@ -1228,3 +1228,28 @@ def test_lanes_agree_reads_closed_boundaries_as_loops(a, closed_a, b, closed_b, 
     la, lb = _lane(a, right, closed_a), _lane(b, right, closed_b)
     assert lanes_agree(la, lb) is agree
     assert lanes_agree(lb, la) is agree
+
+
+def test_lanes_identical_cone_for_cone_to_the_end():
+    from rld.metrics import lanes_identical
+    from rld.types import Lane, LaneStatus, Pose
+
+    # Cones 0-5 along y = 2 (left), 6-11 along y = -2 (right), x = -3 .. 12 m; the car at 0.
+    xs = np.arange(-3.0, 15.0, 3.0)
+    pts = np.vstack([np.column_stack([xs, np.full(6, 2.0)]),
+                     np.column_stack([xs, np.full(6, -2.0)])])
+    car = Pose(0.0, 0.0, 0.0)
+
+    def lane(left, right, closed=False):
+        return Lane(cones=pts, left=np.array(left), right=np.array(right),
+                    status=LaneStatus.OPTIMAL, closed=closed)
+
+    full = lane(range(6), range(6, 12))
+    assert lanes_identical(full, lane(range(1, 6), range(7, 12)), car)  # cone behind: trimmed
+    assert not lanes_identical(full, lane(range(5), range(6, 12)), car)  # cut short
+    assert not lanes_identical(full, lane(range(6, 12), range(6)), car)  # sides swapped
+    none = Lane.not_found(pts, "none")
+    assert not lanes_identical(none, none, car)  # no lane against no lane
+    loop_a, loop_b = lane([0, 1, 2, 3], [6, 7, 8, 9], True), lane([2, 3, 0, 1], [9, 6, 7, 8], True)
+    assert lanes_identical(loop_a, loop_b, car)  # the same edges, another start
+    assert not lanes_identical(loop_a, lane([0, 1, 2, 3], [6, 7, 8, 9]), car)  # open vs closed
