@@ -15,7 +15,7 @@ from rld.constraints import blocked_by_fixed
 from rld.costs import boundary_color_cost, lane_cost
 from rld.types import LaneParams, Pose
 
-__all__ = ["boundary_edges", "insertion_delta", "insert_cones"]
+__all__ = ["boundary_edges", "insertion_delta", "objective_delta", "insert_cones"]
 
 #: Any pose: the objective changes the insertion makes carry no heading term.
 _NO_POSE = Pose(0.0, 0.0, 0.0)
@@ -36,6 +36,15 @@ def insertion_delta(points: np.ndarray, S: np.ndarray, i: int, c: int, lane_edge
     edges and turns it changes; with ``colors`` the colour cost's edge and skip terms too), or
     None when it breaks the turn limit or comes nearer than ``min_width_m`` to another edge
     of ``lane_edges`` (the whole lane's) or crosses one."""
+    delta = objective_delta(points, S, i, c, params, closed, colors)
+    if delta is None or _blocked(points, S, i, c, lane_edges, params):
+        return None
+    return delta
+
+
+def objective_delta(points, S, i, c, params, closed, colors) -> float | None:
+    """``insertion_delta`` without the width and crossing check (None: the turn limit): the
+    cheap part, which rules most candidates out."""
     p = params
     n = S.size
     idx = [(i + k) % n if closed else i + k for k in (-1, 0, 1, 2)]
@@ -46,11 +55,6 @@ def insertion_delta(points: np.ndarray, S: np.ndarray, i: int, c: int, lane_edge
     turns = geo.polyline_turn_angles(points[with_c])
     if np.any(np.abs(turns) > p.max_turn_angle_rad):
         return None
-    a, b = int(S[i]), int(S[(i + 1) % n])
-    same = np.all(np.sort(lane_edges, axis=1) == sorted((a, b)), axis=1)
-    if blocked_by_fixed(points, np.array([[a, c], [c, b]]), lane_edges[~same],
-                        p.min_width_m).any():
-        return None
     delta = lane_cost(points, with_c, [], _NO_POSE, p, heading=False) - \
         lane_cost(points, local, [], _NO_POSE, p, heading=False)
     if colors is not None:
@@ -60,6 +64,22 @@ def insertion_delta(points: np.ndarray, S: np.ndarray, i: int, c: int, lane_edge
             - boundary_color_cost(points, colors, local, _NO_POSE, -1.0,
                                   unknown=p.color_unknown))
     return delta
+
+
+def _blocked(points, S, i, c, lane_edges, params) -> bool:
+    """Whether the edges a -> c -> b cross or pinch another edge of ``lane_edges``."""
+    a, b = int(S[i]), int(S[(i + 1) % S.size])
+    same = np.all(np.sort(lane_edges, axis=1) == sorted((a, b)), axis=1)
+    fixed = lane_edges[~same]
+    # Only edges that can come within min_width_m of a -> c or c -> b (exact: a fixed edge
+    # that near has its midpoint within this reach of c).
+    u, v = points[fixed[:, 0]], points[fixed[:, 1]]
+    new_len = max(float(np.hypot(*(points[a] - points[c]))),
+                  float(np.hypot(*(points[b] - points[c]))))
+    reach = new_len + params.min_width_m + 0.5 * np.hypot(*(v - u).T)
+    fixed = fixed[np.hypot(*(0.5 * (u + v) - points[c]).T) <= reach + 1e-9]
+    return bool(blocked_by_fixed(points, np.array([[a, c], [c, b]]), fixed,
+                                 params.min_width_m).any())
 
 
 def insert_cones(points: np.ndarray, sides: Sequence[np.ndarray], candidates: np.ndarray,
@@ -76,7 +96,7 @@ def insert_cones(points: np.ndarray, sides: Sequence[np.ndarray], candidates: np
     for c in np.asarray(candidates, dtype=np.int64):
         per_side = [boundary_edges(S, closed) for S in sides]
         lane_edges = np.vstack(per_side)
-        best = None
+        options = []
         for s_i, (S, e) in enumerate(zip(sides, per_side, strict=True)):
             if e.shape[0] == 0:
                 continue
@@ -87,12 +107,13 @@ def insert_cones(points: np.ndarray, sides: Sequence[np.ndarray], candidates: np
             if allowed is not None:
                 ok &= allowed(s_i, e)
             for i in np.flatnonzero(ok):
-                delta = insertion_delta(points, S, int(i), int(c), lane_edges, params, closed,
-                                        colors)
-                if delta is not None and (best is None or delta < best[0]):
-                    best = (delta, s_i, int(i))
-        if best is not None and best[0] < -1e-9:
-            _, s_i, i = best
-            sides[s_i] = np.insert(sides[s_i], i + 1, c)
-            count += 1
+                delta = objective_delta(points, S, int(i), int(c), params, closed, colors)
+                if delta is not None and delta < -1e-9:
+                    options.append((delta, s_i, int(i)))
+        # The cheapest edge the insertion breaks no constraint at (the check costs most).
+        for _, s_i, i in sorted(options):
+            if not _blocked(points, sides[s_i], i, int(c), lane_edges, params):
+                sides[s_i] = np.insert(sides[s_i], i + 1, c)
+                count += 1
+                break
     return sides, count
