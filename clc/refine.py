@@ -38,7 +38,7 @@ from rld.costs import (
     width_second_differences,
     within_radius,
 )
-from rld.insertion import boundary_edges, insert_cones, objective_delta
+from rld.insertion import boundary_edges, insert_cones
 from rld.types import LaneParams, Pose
 
 __all__ = ["Refinement", "DEFAULT", "refine", "dive_cost", "dive_costs", "jog_positions",
@@ -436,15 +436,11 @@ def far_insertions(points: np.ndarray, params: LaneParams, left: np.ndarray, rig
         lengths = np.hypot(*(points[e[:, 1]] - points[e[:, 0]]).T)
         return np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
 
-    where = []  # (side, position) of each far edge
-    for side, p in enumerate(paths):
-        e = boundary_edges(p, closed)
-        if e.shape[0]:
-            where += [(side, int(i)) for i in np.flatnonzero(arc_from(e) >= reach_m)]
-    if not where:
+    far = [e[arc_from(e) >= reach_m] for e in (boundary_edges(p, closed) for p in paths)
+           if e.shape[0]]
+    far = np.vstack(far) if far else np.zeros((0, 2), dtype=np.int64)
+    if far.shape[0] == 0:
         return paths[0], paths[1], 0
-    far = np.array([[paths[s][i], paths[s][(i + 1) % paths[s].size]] for s, i in where],
-                   dtype=np.int64)
     a, b = points[far[:, 0]], points[far[:, 1]]
     half_width = 0.5 * params.min_width_m  # insert_cones' reach from an edge
     near = cKDTree(points).query_ball_point(0.5 * (a + b),
@@ -452,16 +448,11 @@ def far_insertions(points: np.ndarray, params: LaneParams, left: np.ndarray, rig
     cand = np.setdiff1d(np.unique(np.concatenate([np.asarray(q, dtype=np.int64)
                                                   for q in near])), np.concatenate(paths))
     if cand.size:  # insert_cones' own test, for these cones and the far edges at once
-        ab = b - a
-        rel = points[cand][:, None, :] - a[None, :, :]
-        t = (rel * ab).sum(axis=2) / np.maximum((ab * ab).sum(axis=1), 1e-18)
-        lat = np.hypot(*(rel - np.clip(t, 0.0, 1.0)[:, :, None] * ab).transpose(2, 0, 1))
-        hit = (t > 0) & (t < 1) & (lat < half_width)
-        # Only cones whose insertion lowers the objective somewhere go on (most do not).
-        cand = np.array([c for c, row in zip(cand, hit, strict=True) if any(
-            (d := objective_delta(points, paths[where[j][0]], where[j][1], int(c), params,
-                                  closed, colors)) is not None and d < -1e-9
-            for j in np.flatnonzero(row))], dtype=np.int64)
+        p_xy = points[cand][:, None, :]
+        t = geo.segment_parameter(p_xy, a[None], b[None])
+        hit = (t > 0) & (t < 1) & (geo.point_segment_distance(p_xy, a[None], b[None])
+                                    < half_width)
+        cand = cand[hit.any(axis=1)]
     if cand.size == 0:
         return paths[0], paths[1], 0
     (left, right), n = insert_cones(points, paths, cand, params, closed, colors,

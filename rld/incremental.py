@@ -82,8 +82,6 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / max(float(np.hypot(v[0], v[1])), 1e-9)
 
 
-
-
 class IncrementalRld:
     """RLD that keeps its lane between calls and re-optimises only the frontier
     (docs/incremental.md). ``backend``: as ``RldModel``; ``frontier_cones``: cones per side

@@ -15,7 +15,7 @@ from rld.constraints import blocked_by_fixed
 from rld.costs import boundary_color_cost, lane_cost
 from rld.types import LaneParams, Pose
 
-__all__ = ["boundary_edges", "insertion_delta", "objective_delta", "insert_cones"]
+__all__ = ["boundary_edges", "insertion_delta", "insert_cones"]
 
 #: Any pose: the objective changes the insertion makes carry no heading term.
 _NO_POSE = Pose(0.0, 0.0, 0.0)
@@ -36,13 +36,13 @@ def insertion_delta(points: np.ndarray, S: np.ndarray, i: int, c: int, lane_edge
     edges and turns it changes; with ``colors`` the colour cost's edge and skip terms too), or
     None when it breaks the turn limit or comes nearer than ``min_width_m`` to another edge
     of ``lane_edges`` (the whole lane's) or crosses one."""
-    delta = objective_delta(points, S, i, c, params, closed, colors)
+    delta = _objective_delta(points, S, i, c, params, closed, colors)
     if delta is None or _blocked(points, S, i, c, lane_edges, params):
         return None
     return delta
 
 
-def objective_delta(points, S, i, c, params, closed, colors) -> float | None:
+def _objective_delta(points, S, i, c, params, closed, colors) -> float | None:
     """``insertion_delta`` without the width and crossing check (None: the turn limit): the
     cheap part, which rules most candidates out."""
     p = params
@@ -107,7 +107,7 @@ def insert_cones(points: np.ndarray, sides: Sequence[np.ndarray], candidates: np
             if allowed is not None:
                 ok &= allowed(s_i, e)
             for i in np.flatnonzero(ok):
-                delta = objective_delta(points, S, int(i), int(c), params, closed, colors)
+                delta = _objective_delta(points, S, int(i), int(c), params, closed, colors)
                 if delta is not None and delta < -1e-9:
                     options.append((delta, s_i, int(i)))
         # The cheapest edge the insertion breaks no constraint at (the check costs most).

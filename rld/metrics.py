@@ -760,9 +760,7 @@ def _closed_agreement(a: np.ndarray, b: np.ndarray, closed_a: bool, closed_b: bo
     a = [int(v) for v in np.asarray(a).ravel()]
     b = [int(v) for v in np.asarray(b).ravel()]
     if closed_a and closed_b:
-        def edges(s):
-            return {tuple(sorted(e)) for e in zip(s, s[1:] + s[:1], strict=True)}
-        return len(a) if a and edges(a) == edges(b) else -1
+        return len(a) if a and _edge_set(a) == _edge_set(b) else -1
     if closed_a and b and b[0] in a:
         i = a.index(b[0])
         a = a[i:] + a[:i]
