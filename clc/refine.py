@@ -7,12 +7,12 @@ beyond it, which under it_max it never does. ``refine`` takes the ranked winner 
 the next-vertex decider, the width jogs, every choice of a lane that stops short) and offers the
 lane without one cone of a close pair; the *judge* (``dive_cost``: RLD's eq. 29 within the
 reach, plus the width roughness) keeps the cheapest lane. It then closes the winner (IV-E), drops
-a closed lane's false join cone, trims an open lane's cones behind the car, and inserts the
-cones it skips beyond the reach. Every part but the last is there because switching it off alone
-raised a geometric critical rate on the choosing and the reporting sets (docs/ablation.md); the
-far insertions lie beyond that rule's reach by construction and serve the index rule and the
-agreement with RLD (docs/clc.md). ``Refinement`` switches them, ``refine=None`` in ``ClcModel``
-leaves the paper's pipeline.
+a closed lane's false join cone, trims an open lane's cones behind the car, inserts the cones
+it skips beyond the reach and extends its far ends. Every part but the last two is there because
+switching it off alone raised a geometric critical rate on the choosing and the reporting sets
+(docs/ablation.md); those two lie beyond that rule's reach by construction and serve the index
+rule and the agreement with RLD (docs/clc.md). ``Refinement`` switches them, ``refine=None``
+in ``ClcModel`` leaves the paper's pipeline.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from rld.costs import (
     width_second_differences,
     within_radius,
 )
-from rld.insertion import boundary_edges, insert_cones
+from rld.insertion import boundary_edges, extend_ends, insert_cones
 from rld.types import LaneParams, Pose
 
 __all__ = ["Refinement", "DEFAULT", "refine", "dive_cost", "dive_costs", "jog_positions",
@@ -47,7 +47,7 @@ __all__ = ["Refinement", "DEFAULT", "refine", "dive_cost", "dive_costs", "jog_po
 
 #: What ``refine`` counts, as ``lane.stats`` keys.
 COUNTS = ("dives", "dive_rounds", "short_lane_rounds", "jog_dives", "pair_drops", "dropped",
-          "trimmed_behind", "inserted")
+          "trimmed_behind", "inserted", "extended")
 
 
 @dataclass(frozen=True)
@@ -84,6 +84,9 @@ class Refinement:
     far_insertions: bool = True
     """Insert the cones the lane skips beyond ``reach_m`` along each boundary, where RLD's
     objective prefers them (``far_insertions``; the judge never looks there)."""
+    end_extensions: bool = True
+    """Extend each open boundary's last cone beyond ``reach_m`` from the car where RLD's
+    objective prefers it (``rld.insertion.extend_ends``; the search stops short of the map)."""
     judge_color: bool = True
     """The judge's objective includes ``LaneParams.w_color`` times the colour cost when a call
     has colours (RLD's, as the rest of the judge). Chosen: docs/tuning.md#judge_color."""
@@ -120,6 +123,9 @@ def refine(points: np.ndarray, pose: Pose, params: LaneParams, res: SearchResult
     if edits.far_insertions:
         left, right, counts["inserted"] = far_insertions(points, params, left, right,
                                                          bool(closed), edits.reach_m, colors)
+    if not closed and edits.end_extensions:
+        (left, right), counts["extended"] = extend_ends(points, pose, (left, right), params,
+                                                        edits.reach_m, colors)
     return (left, right, bool(closed), value), counts, iterations, cut
 
 

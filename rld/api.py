@@ -74,7 +74,8 @@ class _RldMethod:
     budget (``rld.incremental.IncrementalRld.chain``; not in the sided form). A reused solver
     keeps its chain: a later call re-solves the car's window, re-attaches the kept chain where
     they join and grows it for at most ``KEPT_GROWTH_S`` (a whole chain where they do not).
-    The lane is returned from the car forward (``IncrementalRld.forward``)."""
+    The lane is returned from the car forward (``IncrementalRld.forward``), its far ends
+    extended (``IncrementalRld.extend_ends``)."""
 
     backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy", "auto")
     rankers = False
@@ -109,7 +110,8 @@ class _RldMethod:
                                   int(self.model.params.max_windows), colors=colors,
                                   kept=kept, grow_s=KEPT_GROWTH_S)
         self.kept = self.chainer.keep(points, pose, lane)  # the whole chain, to re-attach
-        return self.chainer.forward(points, pose, lane, colors)
+        lane = self.chainer.forward(points, pose, lane, colors)
+        return self.chainer.extend_ends(points, pose, lane, colors)
 
 
 class _RldSidedMethod(_RldMethod):

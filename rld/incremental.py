@@ -22,7 +22,7 @@ from rld.constraints import (
 )
 from rld.costs import lane_cost
 from rld.insertion import boundary_edges as _edges
-from rld.insertion import insert_cones
+from rld.insertion import extend_ends, insert_cones
 from rld.solver import MATCH_TOLERANCE_M, RldModel
 from rld.types import Lane, LaneParams, LaneStatus, Pose
 
@@ -49,6 +49,9 @@ CHAIN_STOPS = ("time budget", "window limit", "no frontier", "no growth", "close
 #: the call has run less than this, seconds (the kept chain carries the rest; 20 Hz).
 #: Chosen by measurement: docs/tuning.md#kept_growth_s.
 KEPT_GROWTH_S = 0.05
+#: ``IncrementalRld.extend_ends`` looks this far from the car and beyond, metres: past the
+#: geometric rule's 20 m, as CLC's (``clc.refine.Refinement.reach_m``). Source: our choice.
+END_REACH_M = 25.0
 #: The frontier program's stats an extend call passes on in ``lane.stats["frontier"]``.
 FRONTIER_STATS = ("n_cones_used", "n_cols", "n_rows", "solve_time_s", "backend", "objective")
 
@@ -422,6 +425,23 @@ class IncrementalRld:
         L, R = lane.left[j[0]:], lane.right[j[1]:]
         stats = dict(lane.stats)
         stats["chain"] = dict(stats.get("chain", {}), behind=int(j[0] + j[1]))
+        return Lane(cones=points, left=L, right=R, status=lane.status, message=lane.message,
+                    cost=lane_cost(points, L, R, pose, self.params, colors=colors),
+                    stats=stats)
+
+    def extend_ends(self, points: np.ndarray, pose: Pose, lane: Lane,
+                    colors: np.ndarray | None = None) -> Lane:
+        """An open ``lane``'s boundaries extended at their far ends, beyond ``END_REACH_M``
+        from the car, where RLD's objective prefers it (``rld.insertion.extend_ends``), its
+        cost recomputed; ``stats["chain"]["extended"]`` counts the cones added."""
+        if not lane.ok or lane.closed:
+            return lane
+        (L, R), n = extend_ends(points, pose, (lane.left, lane.right), self.params,
+                                END_REACH_M, colors)
+        if not n:
+            return lane
+        stats = dict(lane.stats)
+        stats["chain"] = dict(stats.get("chain", {}), extended=int(n))
         return Lane(cones=points, left=L, right=R, status=lane.status, message=lane.message,
                     cost=lane_cost(points, L, R, pose, self.params, colors=colors),
                     stats=stats)

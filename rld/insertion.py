@@ -1,7 +1,8 @@
 """Cone insertion into a found lane: a cone beside an edge (a, b) of a boundary joins it as
 a -> c -> b when that lowers RLD's objective (eq. 29, the shared ``lane_cost``) and breaks no
-constraint. The one home of the rule for the incremental solver's late insertions
-(``rld.incremental``) and CLC's far insertions (``clc.refine``); ours, in neither paper.
+constraint; a boundary's far end extended by a map cone so (``extend_ends``). The one home of the
+rules for the incremental solver's late insertions (``rld.incremental``) and CLC's far insertions
+and end extensions (``clc.refine``, ``rld.api``); ours, in neither paper.
 """
 
 from __future__ import annotations
@@ -9,13 +10,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from rld import geometry as geo
-from rld.constraints import blocked_by_fixed
+from rld.constraints import blocked_by_fixed, lane_is_feasible
 from rld.costs import boundary_color_cost, lane_cost
 from rld.types import LaneParams, Pose
 
-__all__ = ["boundary_edges", "insertion_delta", "insert_cones"]
+__all__ = ["boundary_edges", "insertion_delta", "insert_cones", "extend_ends", "MAX_END_CONES"]
 
 #: Any pose: the objective changes the insertion makes carry no heading term.
 _NO_POSE = Pose(0.0, 0.0, 0.0)
@@ -115,5 +117,53 @@ def insert_cones(points: np.ndarray, sides: Sequence[np.ndarray], candidates: np
             if not _blocked(points, sides[s_i], i, int(c), lane_edges, params):
                 sides[s_i] = np.insert(sides[s_i], i + 1, c)
                 count += 1
+                break
+    return sides, count
+
+
+#: The most cones ``extend_ends`` adds at one end of a boundary. Source: our choice (the
+#: truth's ends that CLC missed on clean tracks were one or two cones).
+MAX_END_CONES = 2
+
+
+def extend_ends(points: np.ndarray, pose: Pose, sides: Sequence[np.ndarray],
+                params: LaneParams, min_distance_m: float, colors: np.ndarray | None = None,
+                max_cones: int = MAX_END_CONES) -> tuple[list[np.ndarray], int]:
+    """Each open boundary (left, right) extended at its last cone by the map cone within
+    ``max_cone_spacing_m`` that lowers RLD's objective most (``lane_cost``, eq. 29) where the
+    lane stays feasible (``lane_is_feasible`` less w_max), both cones at least
+    ``min_distance_m`` from the car; at most ``max_cones`` a side. Returns (sides, added)."""
+    sides = [np.asarray(S, dtype=np.int64).copy() for S in sides]
+    if min(S.size for S in sides) < 2:
+        return sides, 0
+    far = np.hypot(*(points - pose.xy).T) >= min_distance_m
+    tree = None
+    count = 0
+    for s_i in (0, 1):
+        for _ in range(max_cones):
+            S = sides[s_i]
+            if not far[S[-1]]:
+                break
+            tree = cKDTree(points) if tree is None else tree
+            near = np.asarray(tree.query_ball_point(points[S[-1]], params.max_cone_spacing_m),
+                              dtype=np.int64)
+            cand = np.setdiff1d(near[far[near]], np.concatenate(sides))
+            if cand.size == 0:
+                break
+            base = lane_cost(points, S, [], pose, params, colors=colors)
+            trials = [np.r_[S, c] for c in cand]
+            deltas = [lane_cost(points, T, [], pose, params, colors=colors) - base
+                      for T in trials]
+            added = False
+            for k in np.argsort(deltas, kind="stable"):
+                if deltas[k] >= -1e-9:
+                    break
+                new = list(sides)
+                new[s_i] = trials[k]
+                if lane_is_feasible(points[new[0]], points[new[1]], params, max_width=False):
+                    sides, added = new, True
+                    count += 1
+                    break
+            if not added:
                 break
     return sides, count

@@ -5,10 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from clc.refine import far_insertions
+from rld.constraints import lane_is_feasible
 from rld.costs import lane_cost
-from rld.insertion import boundary_edges, insert_cones, insertion_delta
+from rld.insertion import boundary_edges, extend_ends, insert_cones, insertion_delta
 from rld.types import LaneParams, Pose
 
 P = LaneParams()
@@ -74,3 +77,84 @@ def test_far_insertions_leave_the_first_reach_alone():
     assert k == 1 and 10 in L and 3 not in L and R.tolist() == right.tolist()
     L, R, k = far_insertions(pts, P, left, right, closed=False, reach_m=5.0)
     assert k == 2 and L.tolist() == list(range(n))
+
+
+# -- end extensions (rld.insertion.extend_ends) ---------------------------------------------
+
+CAR = Pose(1.0, 0.0, 0.0)  # between the boundaries, heading along +x
+
+
+def _straight(left_idx, right_idx, extra=()):
+    """Points: LEFT, RIGHT, then ``extra``; the sides as index lists into them."""
+    pts = np.vstack([LEFT, RIGHT, np.asarray(extra, dtype=float).reshape(-1, 2)])
+    return pts, np.asarray(left_idx), np.asarray(right_idx)
+
+
+def test_a_boundary_short_of_its_last_cones_is_extended_by_them():
+    n = XS.size
+    pts, left, right = _straight(range(n - 2), range(n, 2 * n))
+    (L, R), count = extend_ends(pts, CAR, (left, right), P, 25.0)
+    assert count == 2 and L.tolist() == list(range(n)) and R.tolist() == right.tolist()
+    # One at a time, each the cheapest: the first step alone adds cone n - 2.
+    (L1, _), c1 = extend_ends(pts, CAR, (left, right), P, 25.0, max_cones=1)
+    assert c1 == 1 and L1.tolist() == list(range(n - 1))
+    assert lane_cost(pts, L, R, CAR, P) < lane_cost(pts, left, right, CAR, P)
+
+
+def test_no_end_within_the_distance_from_the_car_is_extended():
+    n = XS.size
+    # The left side ends at x = 35 (34 m from the car), its next cone at 38.5 m: not at 36 m.
+    pts, left, right = _straight(range(n - 2), range(n, 2 * n))
+    (L, _), count = extend_ends(pts, CAR, (left, right), P, 36.0)
+    assert count == 0 and L.tolist() == left.tolist()
+    # At 35 m the end cone (34 m from the car) is too near; at 34 m both may be taken.
+    assert extend_ends(pts, CAR, (left, right), P, 35.0)[1] == 0
+    assert extend_ends(pts, CAR, (left, right), P, 34.0)[1] == 2
+
+
+def test_an_end_cone_that_would_pinch_the_lane_is_not_taken():
+    n = XS.size
+    # Beyond the left side's end (x = 35) a cone 1 m from the right boundary (x = 38.5, y =
+    # -1): cheaper by the objective than the true cone, but under min_width_m from a right cone.
+    pts, left, right = _straight(range(n - 2), range(n, 2 * n), extra=[[38.5, -1.0]])
+    (L, R), count = extend_ends(pts, CAR, (left, right), P, 25.0, max_cones=1)
+    assert 2 * n not in L and 2 * n not in R
+    assert count == 1 and L.tolist() == list(range(n - 1))  # the true cone instead
+
+
+def test_degenerate_sides_are_left_alone():
+    pts, left, right = _straight([0], range(XS.size, 2 * XS.size))
+    (L, R), count = extend_ends(pts, CAR, (left, right), P, 0.0)
+    assert count == 0 and L.tolist() == [0]
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 3), st.integers(0, 3), st.integers(0, 2**31 - 1))
+def test_extension_matches_brute_force_and_never_raises_the_objective(cut_l, cut_r, seed):
+    # Random extra cones around a straight lane cut short at its far ends; the first step
+    # (max_cones = 1, the left side's last cone) against trying every map cone by hand.
+    rng = np.random.default_rng(seed)
+    n = XS.size
+    extra = np.column_stack([rng.uniform(-5, 50, 12), rng.uniform(-6, 6, 12)])
+    pts, left, right = _straight(range(n - cut_l), range(n, 2 * n - cut_r), extra)
+    car = Pose(1.0, 0.0, float(rng.uniform(-0.2, 0.2)))
+    reach = 20.0
+    (L, R), count = extend_ends(pts, car, (left, right), P, reach)
+    assert lane_cost(pts, L, R, car, P) <= lane_cost(pts, left, right, car, P) + 1e-9
+    assert count == 0 or lane_is_feasible(pts[L], pts[R], P, max_width=False)
+    for new, old in ((L, left), (R, right)):
+        assert new[:old.size].tolist() == old.tolist() and new.size - old.size <= 2
+        assert np.all(np.hypot(*(pts[new[old.size:]] - car.xy).T) >= reach)
+    (L1, _), _ = extend_ends(pts, car, (left, right), P, reach, max_cones=1)
+    used = set(left.tolist()) | set(right.tolist())
+    base = lane_cost(pts, left, [], car, P)
+    best, best_c = -1e-9, None
+    for c in range(pts.shape[0]):
+        if (c in used or np.hypot(*(pts[c] - pts[left[-1]])) > P.max_cone_spacing_m
+                or np.hypot(*(pts[c] - car.xy)) < reach):
+            continue
+        trial = np.r_[left, c]
+        d = lane_cost(pts, trial, [], car, P) - base
+        if d < best and lane_is_feasible(pts[trial], pts[right], P, max_width=False):
+            best, best_c = d, c
+    assert L1.tolist() == (left.tolist() if best_c is None else left.tolist() + [best_c])
