@@ -97,3 +97,21 @@ def test_forward_table_counts_the_poses_the_view_fixed_and_broke():
     assert lines[2] == ("| all | 3 | 33.33 / 66.67 | 0.00 / 66.67 | 1 / 0; 1 / 1 | -33.33 "
                         "[-33.33, -33.33], +0.00 [+0.00, +0.00] | 30.0 / 28.0 |")
     assert lines[3].startswith("| 50 m 30% | 3 | 33.33 / 66.67 |")
+
+
+def test_ends_table_counts_the_poses_the_extension_fixed_and_broke():
+    from benchmarks import bench_ends as be
+
+    def rec(pose, off, on, off_gt, on_gt):
+        return dict(seed=1, range_m=30.0, fp_rate=0.5, track=1, pose=pose, off_m=off, on_m=on,
+                    off_length_m=40.0, on_length_m=42.0, off_gt=off_gt, on_gt=on_gt)
+
+    recs = [rec(0, 0.2, 1.5, False, False), rec(2, 0.7, 0.7, False, True),
+            rec(4, 0.6, 0.1, True, True), rec(6, 0.0, 0.0, False, False)]
+    assert be.lap_interval(recs, 1.0) == pytest.approx((25.0, 25.0, 25.0))
+    assert be.lap_interval(recs, 0.5) == pytest.approx((0.0, 0.0, 0.0))
+    lines = be.table(recs).splitlines()
+    # > 1 m: one broken (0.2 -> 1.5); > 0.5 m: one broken, one fixed (0.6 -> 0.1).
+    assert lines[2] == ("| all | 4 | 0.00 / 50.00 | 25.00 / 50.00 | 0 / 1; 1 / 1 | +25.00 "
+                        "[+25.00, +25.00], +0.00 [+0.00, +0.00] | 40.0 / 42.0 | 25.0 / 50.0 |")
+    assert lines[3].startswith("| 30 m 50% | 4 | 0.00 / 50.00 |")
