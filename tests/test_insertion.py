@@ -11,7 +11,13 @@ from hypothesis import strategies as st
 from clc.refine import far_insertions
 from rld import geometry as geo
 from rld.costs import boundary_color_cost, lane_cost
-from rld.insertion import _objective_deltas, boundary_edges, insert_cones, insertion_delta
+from rld.insertion import (
+    _objective_deltas,
+    beside,
+    boundary_edges,
+    insert_cones,
+    insertion_delta,
+)
 from rld.types import LaneParams, Pose
 
 P = LaneParams()
@@ -136,3 +142,18 @@ def test_the_compiled_delta_is_the_lane_cost_difference(seed, n, closed, colored
                  - lane_cost(pts, S, [], no_pose, p, closed=closed, colors=colors,
                              heading=False))
         assert delta[0] == pytest.approx(whole, rel=1e-9, abs=1e-9)
+
+
+@given(seed=st.integers(0, 2**32 - 1))
+def test_beside_is_the_foot_and_distance_test(seed):
+    # Cones scattered about a few edges: the kernel against segment_parameter and
+    # point_segment_distance broadcast, and against the allowed mask.
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(0.0, 10.0, (12, 2))
+    cones, edges = np.arange(6), rng.integers(6, 12, (5, 2))
+    p, a, b = pts[cones][:, None], pts[edges[:, 0]][None], pts[edges[:, 1]][None]
+    t = geo.segment_parameter(p, a, b)
+    want = (t > 0) & (t < 1) & (geo.point_segment_distance(p, a, b) < 1.25)
+    assert np.array_equal(beside(pts, cones, edges, 1.25), want)
+    allowed = rng.random(5) < 0.5
+    assert np.array_equal(beside(pts, cones, edges, 1.25, allowed), want & allowed)
