@@ -23,7 +23,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from clc import search_kernels as sk
 from clc.search import SearchGraph, SearchResult, closable, enumerate_candidates
@@ -38,7 +37,7 @@ from rld.costs import (
     width_second_differences,
     within_radius,
 )
-from rld.insertion import boundary_edges, extend_ends, insert_cones
+from rld.insertion import beside, boundary_edges, extend_ends, insert_cones
 from rld.types import LaneParams, Pose
 
 __all__ = ["Refinement", "DEFAULT", "refine", "dive_cost", "dive_costs", "jog_positions",
@@ -438,31 +437,23 @@ def far_insertions(points: np.ndarray, params: LaneParams, left: np.ndarray, rig
     insertions)."""
     paths = [np.asarray(left, dtype=np.int64), np.asarray(right, dtype=np.int64)]
 
-    def arc_from(e: np.ndarray) -> np.ndarray:  # arc length from the first cone to each edge
+    def far(side: int, e: np.ndarray) -> np.ndarray:  # the edges reach_m or more along
         lengths = np.hypot(*(points[e[:, 1]] - points[e[:, 0]]).T)
-        return np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
+        return np.concatenate([[0.0], np.cumsum(lengths)[:-1]]) >= reach_m
 
-    far = [e[arc_from(e) >= reach_m] for e in (boundary_edges(p, closed) for p in paths)
-           if e.shape[0]]
-    far = np.vstack(far) if far else np.zeros((0, 2), dtype=np.int64)
-    if far.shape[0] == 0:
+    edges = [boundary_edges(p, closed) for p in paths]
+    far_edges = np.vstack([e[far(s, e)] for s, e in enumerate(edges) if e.shape[0]]
+                          or [np.zeros((0, 2), dtype=np.int64)])
+    if far_edges.shape[0] == 0:
         return paths[0], paths[1], 0
-    a, b = points[far[:, 0]], points[far[:, 1]]
-    half_width = 0.5 * params.min_width_m  # insert_cones' reach from an edge
-    near = cKDTree(points).query_ball_point(0.5 * (a + b),
-                                            0.5 * np.hypot(*(b - a).T) + half_width)
-    cand = np.setdiff1d(np.unique(np.concatenate([np.asarray(q, dtype=np.int64)
-                                                  for q in near])), np.concatenate(paths))
-    if cand.size:  # insert_cones' own test, for these cones and the far edges at once
-        p_xy = points[cand][:, None, :]
-        t = geo.segment_parameter(p_xy, a[None], b[None])
-        hit = (t > 0) & (t < 1) & (geo.point_segment_distance(p_xy, a[None], b[None])
-                                    < half_width)
-        cand = cand[hit.any(axis=1)]
+    # The cones off the lane beside a far edge as insert_cones tests it, all at once.
+    off = np.ones(points.shape[0], dtype=bool)
+    off[np.concatenate(paths)] = False
+    cand = np.flatnonzero(off)
+    cand = cand[beside(points, cand, far_edges, 0.5 * params.min_width_m).any(axis=1)]
     if cand.size == 0:
         return paths[0], paths[1], 0
-    (left, right), n = insert_cones(points, paths, cand, params, closed, colors,
-                                    allowed=lambda side, e: arc_from(e) >= reach_m)
+    (left, right), n = insert_cones(points, paths, cand, params, closed, colors, allowed=far)
     return left, right, n
 
 

@@ -233,9 +233,10 @@ def segment_parameter(p, a, b) -> np.ndarray:
     """Where the foot of ``p`` on the line through ``a``-``b`` lies: 0 at ``a``, 1 at ``b``,
     unclamped (below 0 before ``a``, above 1 past ``b``). (..., 2) arrays, broadcast; returns
     (...)."""
-    p, a, b = (np.asarray(x, dtype=np.float64) for x in (p, a, b))
-    ab = b - a
-    return ((p - a) * ab).sum(axis=-1) / np.maximum((ab * ab).sum(axis=-1), 1e-18)
+    shape, (p, a, b) = _flat(p, a, b)
+    out = np.empty(p.shape[0])
+    gk.segment_parameter_many(p, a, b, out)
+    return out.reshape(shape)
 
 
 def nearest_on_polyline(points, poly: np.ndarray):

@@ -58,6 +58,15 @@ def point_segment_distance(px, py, ax, ay, bx, by):
 
 
 @njit(cache=True)
+def segment_parameter(px, py, ax, ay, bx, by):
+    """Where the foot of p on the line through a-b lies: 0 at a, 1 at b, unclamped (a
+    zero-length segment: its squared length floored at 1e-18 m^2)."""
+    dx = bx - ax
+    dy = by - ay
+    return ((px - ax) * dx + (py - ay) * dy) / max(dx * dx + dy * dy, 1e-18)
+
+
+@njit(cache=True)
 def _on_segment(px, py, ax, ay, bx, by):
     """p, known collinear with ab, lies within ab's bounding box."""
     return (
@@ -216,6 +225,12 @@ def turn_angle(ax, ay, bx, by, cx, cy):
 def point_segment_distance_many(p, a, b, out):
     for i in range(p.shape[0]):
         out[i] = point_segment_distance(p[i, 0], p[i, 1], a[i, 0], a[i, 1], b[i, 0], b[i, 1])
+
+
+@njit(cache=True)
+def segment_parameter_many(p, a, b, out):
+    for i in range(p.shape[0]):
+        out[i] = segment_parameter(p[i, 0], p[i, 1], a[i, 0], a[i, 1], b[i, 0], b[i, 1])
 
 
 @njit(cache=True)

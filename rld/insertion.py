@@ -7,20 +7,22 @@ and end extensions (``clc.refine``, ``rld.api``); ours, in neither paper.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from rld import geometry as geo
+from rld import insertion_kernels as ik
 from rld.constraints import blocked_by_fixed, lane_is_feasible
-from rld.costs import boundary_color_cost, lane_cost
+from rld.costs import lane_cost
 from rld.types import LaneParams, Pose
 
-__all__ = ["boundary_edges", "insertion_delta", "insert_cones", "extend_ends", "MAX_END_CONES"]
+__all__ = ["boundary_edges", "beside", "insertion_delta", "insert_cones", "extend_ends",
+           "MAX_END_CONES"]
 
-#: Any pose: the objective changes the insertion makes carry no heading term.
-_NO_POSE = Pose(0.0, 0.0, 0.0)
+#: No colours: the kernel's empty label array.
+_NO_LABELS = np.zeros(0, dtype=np.int64)
 
 
 def boundary_edges(seq: np.ndarray, closed: bool = False) -> np.ndarray:
@@ -38,34 +40,34 @@ def insertion_delta(points: np.ndarray, S: np.ndarray, i: int, c: int, lane_edge
     edges and turns it changes; with ``colors`` the colour cost's edge and skip terms too), or
     None when it breaks the turn limit or comes nearer than ``min_width_m`` to another edge
     of ``lane_edges`` (the whole lane's) or crosses one."""
-    delta = _objective_delta(points, S, i, c, params, closed, colors)
-    if delta is None or _blocked(points, S, i, c, lane_edges, params):
+    S = np.asarray(S, dtype=np.int64)
+    delta, ok = _objective_deltas(points, [S], np.zeros(1, dtype=np.int64),
+                                  np.array([i], dtype=np.int64), np.array([c], dtype=np.int64),
+                                  params, closed, colors)
+    if not ok[0] or _blocked(points, S, i, c, lane_edges, params):
         return None
-    return delta
+    return float(delta[0])
 
 
-def _objective_delta(points, S, i, c, params, closed, colors) -> float | None:
-    """``insertion_delta`` without the width and crossing check (None: the turn limit): the
-    cheap part, which rules most candidates out."""
+def _objective_deltas(points, sides, side, pos, cones, params, closed, colors):
+    """``insertion_delta`` without the width and crossing check, for cone ``cones[k]`` after
+    position ``pos[k]`` of ``sides[side[k]]``, in one compiled call: (deltas, ok), ok False
+    past the turn limit. The cheap part, which rules most candidates out."""
     p = params
-    n = S.size
-    idx = [(i + k) % n if closed else i + k for k in (-1, 0, 1, 2)]
-    idx = idx if closed else [j for j in idx if 0 <= j < n]
-    local = S[idx]
-    pos = int(np.flatnonzero(local == S[i])[0])
-    with_c = np.insert(local, pos + 1, c)
-    turns = geo.polyline_turn_angles(points[with_c])
-    if np.any(np.abs(turns) > p.max_turn_angle_rad):
-        return None
-    delta = lane_cost(points, with_c, [], _NO_POSE, p, heading=False) - \
-        lane_cost(points, local, [], _NO_POSE, p, heading=False)
-    if colors is not None:
-        # The window's ends are no boundary ends (a start radius of -1 m: no start term).
-        delta += p.w_color * (
-            boundary_color_cost(points, colors, with_c, _NO_POSE, -1.0, unknown=p.color_unknown)
-            - boundary_color_cost(points, colors, local, _NO_POSE, -1.0,
-                                  unknown=p.color_unknown))
-    return delta
+    flat = np.ascontiguousarray(np.concatenate(sides), dtype=np.int64)
+    ptr = np.concatenate([[0], np.cumsum([S.size for S in sides])]).astype(np.int64)
+    out = np.empty(side.size)
+    ok = np.empty(side.size, dtype=np.bool_)
+    ik.objective_deltas(np.ascontiguousarray(points, dtype=np.float64), flat, ptr, bool(closed),
+                        side, pos, cones, float(p.max_turn_angle_rad),
+                        float(p.expected_spacing_m), float(p.spacing_tolerance_m),
+                        float(p.w_spacing), float(p.w_benefit), float(p.w_angle),
+                        float(p.angle_tolerance_rad), float(p.w_regularity),
+                        math.log(p.regularity_tolerance) if p.w_regularity else 1.0,
+                        _NO_LABELS if colors is None
+                        else np.ascontiguousarray(colors, dtype=np.int64),
+                        float(p.w_color), float(p.color_unknown), out, ok)
+    return out, ok
 
 
 def _blocked(points, S, i, c, lane_edges, params) -> bool:
@@ -93,32 +95,58 @@ def insert_cones(points: np.ndarray, sides: Sequence[np.ndarray], candidates: np
     ``allowed(side, edges)``: a boolean mask of the edges that may take a cone (default all).
     Returns (the sides, insertions)."""
     sides = [np.asarray(S, dtype=np.int64).copy() for S in sides]
-    half_width = params.min_width_m / 2
-    count = 0
-    for c in np.asarray(candidates, dtype=np.int64):
+    cands = np.asarray(candidates, dtype=np.int64).reshape(-1)
+    count = first = 0
+    while first < cands.size:
+        # The options of every cone still to come against the sides as they are; after an
+        # insertion, those of the cones after it again.
+        rest = cands[first:]
         per_side = [boundary_edges(S, closed) for S in sides]
         lane_edges = np.vstack(per_side)
-        options = []
-        for s_i, (S, e) in enumerate(zip(sides, per_side, strict=True)):
-            if e.shape[0] == 0:
-                continue
-            a_xy, b_xy = points[e[:, 0]], points[e[:, 1]]
-            t = geo.segment_parameter(points[c], a_xy, b_xy)
-            ok = (t > 0) & (t < 1) & (geo.point_segment_distance(points[c], a_xy, b_xy)
-                                       < half_width)
-            if allowed is not None:
-                ok &= allowed(s_i, e)
-            for i in np.flatnonzero(ok):
-                delta = _objective_delta(points, S, int(i), int(c), params, closed, colors)
-                if delta is not None and delta < -1e-9:
-                    options.append((delta, s_i, int(i)))
-        # The cheapest edge the insertion breaks no constraint at (the check costs most).
-        for _, s_i, i in sorted(options):
-            if not _blocked(points, sides[s_i], i, int(c), lane_edges, params):
-                sides[s_i] = np.insert(sides[s_i], i + 1, c)
-                count += 1
+        found = [np.nonzero(beside(points, rest, e, params.min_width_m / 2,
+                                    None if allowed is None or e.shape[0] == 0
+                                    else allowed(s_i, e)))
+                 for s_i, e in enumerate(per_side)]
+        which = np.concatenate([f[0] for f in found])
+        side = np.concatenate([np.full(f[0].size, s_i, dtype=np.int64)
+                               for s_i, f in enumerate(found)])
+        pos = np.concatenate([f[1] for f in found]).astype(np.int64)
+        if which.size == 0:
+            break
+        delta, ok = _objective_deltas(points, sides, side, pos, rest[which], params, closed,
+                                      colors)
+        good = ok & (delta < -1e-9)
+        which, side, pos, delta = which[good], side[good], pos[good], delta[good]
+        done = None
+        for k in np.unique(which).tolist():
+            at = which == k
+            # The cheapest edge the insertion breaks no constraint at (the check costs most).
+            for _, s_i, i in sorted(zip(delta[at].tolist(), side[at].tolist(),
+                                        pos[at].tolist(), strict=True)):
+                c = int(rest[k])
+                if not _blocked(points, sides[s_i], i, c, lane_edges, params):
+                    sides[s_i] = np.insert(sides[s_i], i + 1, c)
+                    count += 1
+                    done = k
+                    break
+            if done is not None:
                 break
+        if done is None:
+            break
+        first += done + 1
     return sides, count
+
+
+def beside(points: np.ndarray, cones: np.ndarray, edges: np.ndarray, half_width: float,
+           allowed: np.ndarray | None = None) -> np.ndarray:
+    """(cones, edges) bool, ``insert_cones``' test: the cone's foot lies strictly between the
+    edge's ends, less than ``half_width`` (metres) from it, and the edge is ``allowed``."""
+    out = np.zeros((cones.size, edges.shape[0]), dtype=np.bool_)
+    if out.size:
+        ik.beside(np.ascontiguousarray(points, dtype=np.float64),
+                  np.ascontiguousarray(cones, dtype=np.int64),
+                  np.ascontiguousarray(edges, dtype=np.int64), float(half_width), out)
+    return out if allowed is None else out & allowed
 
 
 #: The most cones ``extend_ends`` adds at one end of a boundary. Source: our choice (the

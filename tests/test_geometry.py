@@ -173,6 +173,19 @@ def test_point_segment_distance_hand_worked():
     np.testing.assert_allclose(out, [4.0, 5.0, 0.0], atol=1e-12)
 
 
+@given(seed=st.integers(0, 2**32 - 1), scale=st.sampled_from([1e-3, 1.0, 1e4]))
+def test_segment_parameter_is_its_numpy_formula_bit_for_bit(seed, scale):
+    # The compiled form (geometry_kernels.segment_parameter) against the numpy one it replaced,
+    # broadcast (k, 1, 2) against (1, m, 2), zero-length segments among them.
+    rng = np.random.default_rng(seed)
+    p = rng.normal(0, scale, (int(rng.integers(1, 9)), 1, 2))
+    a = rng.normal(0, scale, (1, int(rng.integers(1, 9)), 2))
+    b = a + rng.normal(0, scale, a.shape) * (rng.random(a.shape[:2])[..., None] > 0.2)
+    ab = b - a
+    want = ((p - a) * ab).sum(axis=-1) / np.maximum((ab * ab).sum(axis=-1), 1e-18)
+    assert np.array_equal(geo.segment_parameter(p, a, b), want)
+
+
 def test_segment_parameter_and_nearest_on_polyline_hand_worked():
     a, b = np.array([0.0, 0.0]), np.array([4.0, 0.0])
     p = np.array([[1.0, 3.0], [-2.0, 1.0], [6.0, -1.0], [4.0, 2.0]])
