@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from benchmarks import bench_color as bc
@@ -115,3 +116,23 @@ def test_ends_table_counts_the_poses_the_extension_fixed_and_broke():
     assert lines[2] == ("| all | 4 | 0.00 / 50.00 | 25.00 / 50.00 | 0 / 1; 1 / 1 | +25.00 "
                         "[+25.00, +25.00], +0.00 [+0.00, +0.00] | 40.0 / 42.0 | 25.0 / 50.0 |")
     assert lines[3].startswith("| 30 m 50% | 4 | 0.00 / 50.00 |")
+
+
+def test_agreement_names_the_first_difference():
+    from benchmarks import bench_agreement as ba
+    from rld.types import Lane, LaneStatus, Pose
+
+    cones = np.array([[0.0, 2.0], [4.0, 2.0], [8.0, 2.0], [0.0, -2.0], [4.0, -2.0],
+                      [8.0, -2.0], [12.0, -2.0]])
+    pose = Pose(-1.0, 0.0, 0.0)
+
+    def lane(left, right):
+        return Lane(cones=cones, left=np.array(left), right=np.array(right),
+                    status=LaneStatus.OPTIMAL)
+
+    a, b = lane([0, 1, 2], [3, 4, 5, 6]), lane([0, 1, 2], [3, 4, 5])
+    assert ba._first_difference(a, a, pose, False) is None
+    side, k, xy = ba._first_difference(a, b, pose, False)
+    assert (side, k) == ("right", 3) and xy.tolist() == [12.0, -2.0]
+    side, k, _ = ba._first_difference(lane([1, 2], [3, 4, 5]), b, pose, False)
+    assert (side, k) == ("left", 0)
