@@ -75,7 +75,7 @@ class _RldMethod:
     keeps its chain: a later call re-solves the car's window, re-attaches the kept chain where
     they join and grows it for at most ``KEPT_GROWTH_S`` (a whole chain where they do not).
     The lane is returned from the car forward (``IncrementalRld.forward``), its far ends
-    extended (``IncrementalRld.extend_ends``)."""
+    extended (``IncrementalRld.extend_ends``); a short one is tried again (``_retry``)."""
 
     backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy", "auto")
     rankers = False
@@ -85,6 +85,8 @@ class _RldMethod:
         from rld.solver import RldModel
 
         self.model = RldModel(params, backend=backend, sided=self.sided)
+        self.retry = None  # the wider window of a short lane's retry (made on first use)
+        self.backend = backend
         self.chainer = None
         self.kept = None  # the last call's chain (rld.incremental.KeptChain)
         if int(params.max_windows) > 1 and not self.sided:
@@ -100,18 +102,57 @@ class _RldMethod:
         from rld.solver import DEFAULT_TIME_LIMIT_S
 
         t0 = time.perf_counter()
+        budget = DEFAULT_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
         lane = self.model.solve(points, pose, time_limit_s=time_limit_s, colors=colors,
                                 confidence=confidence)
         kept, self.kept = self.kept, None
-        if self.chainer is None or not lane.ok:
+        if self.chainer is None:
             return lane
-        budget = DEFAULT_TIME_LIMIT_S if time_limit_s is None else float(time_limit_s)
-        lane = self.chainer.chain(points, pose, lane, t0, budget,
-                                  int(self.model.params.max_windows), colors=colors,
-                                  kept=kept, grow_s=KEPT_GROWTH_S)
-        self.kept = self.chainer.keep(points, pose, lane)  # the whole chain, to re-attach
-        lane = self.chainer.forward(points, pose, lane, colors)
-        return self.chainer.extend_ends(points, pose, lane, colors)
+        if lane.ok:
+            lane = self.chainer.chain(points, pose, lane, t0, budget,
+                                      int(self.model.params.max_windows), colors=colors,
+                                      kept=kept, grow_s=KEPT_GROWTH_S)
+            self.kept = self.chainer.keep(points, pose, lane)  # the whole chain, to re-attach
+            lane = self.chainer.extend_ends(points, pose,
+                                            self.chainer.forward(points, pose, lane, colors),
+                                            colors)
+        if self.chainer.short(points, pose, lane):
+            lane = self._retry(points, pose, lane, t0, budget, colors, confidence)
+        return lane
+
+    def _retry(self, points, pose, lane, t0, budget, colors, confidence) -> Lane:
+        """A short lane (``IncrementalRld.short``) against a stateless chain from the car's
+        window of ``RETRY_MAX_CONES`` cones, within the call's budget: the one RLD's objective
+        (eq. 29) prefers within 25 m of the car wins (``lane_cost(radius_m=...)``)."""
+        from rld.costs import lane_cost
+        from rld.incremental import END_REACH_M, RETRY_MAX_CONES
+        from rld.solver import RldModel
+
+        left = budget - (time.perf_counter() - t0)
+        if left <= 0:
+            return lane
+        p = self.model.params
+        if self.retry is None:
+            self.retry = RldModel(replace(p, max_cones=max(RETRY_MAX_CONES, int(p.max_cones))),
+                                  backend=self.backend)
+        wide = self.retry.solve(points, pose, time_limit_s=left, colors=colors,
+                                confidence=confidence)
+        if not wide.ok:
+            return lane
+        wide = self.chainer.chain(points, pose, wide, t0, budget, int(p.max_windows),
+                                  colors=colors)
+        view = self.chainer.extend_ends(points, pose,
+                                        self.chainer.forward(points, pose, wide, colors), colors)
+
+        def near_cost(x: Lane) -> float:
+            return -np.inf if x.closed else lane_cost(points, x.left, x.right, pose, p,
+                                                      colors=colors, radius_m=END_REACH_M)
+
+        if lane.ok and near_cost(view) >= near_cost(lane):
+            return lane
+        self.kept = self.chainer.keep(points, pose, wide)
+        view.stats["retry"] = True
+        return view
 
 
 class _RldSidedMethod(_RldMethod):

@@ -52,6 +52,13 @@ KEPT_GROWTH_S = 0.05
 #: ``IncrementalRld.extend_ends`` looks this far from the car and beyond, metres: past the
 #: geometric rule's 20 m, as CLC's (``clc.refine.Refinement.reach_m``). Source: our choice.
 END_REACH_M = 25.0
+#: A returned lane with a side whose cones all lie nearer the car than this (metres; the
+#: geometric rule's 20 m) is short: ``rld`` solves again from a wider window (``RETRY_MAX_CONES``).
+#: Chosen by measurement: docs/tuning.md#short_lane_retry.
+SHORT_LANE_M = 20.0
+#: The car's window of that retry, cones (``max_cones`` is 20). Chosen by measurement:
+#: docs/tuning.md#short_lane_retry.
+RETRY_MAX_CONES = 30
 #: The frontier program's stats an extend call passes on in ``lane.stats["frontier"]``.
 FRONTIER_STATS = ("n_cones_used", "n_cols", "n_rows", "solve_time_s", "backend", "objective")
 
@@ -428,6 +435,18 @@ class IncrementalRld:
         return Lane(cones=points, left=L, right=R, status=lane.status, message=lane.message,
                     cost=lane_cost(points, L, R, pose, self.params, colors=colors),
                     stats=stats)
+
+    @staticmethod
+    def short(points: np.ndarray, pose: Pose, lane: Lane) -> bool:
+        """Whether an open ``lane`` has a side within ``SHORT_LANE_M`` of the car while the map
+        holds a cone beyond (no lane: short; a closed lane: not)."""
+        far = float(np.hypot(*(points - pose.xy).T).max()) > SHORT_LANE_M
+        if not lane.ok:
+            return far
+        if lane.closed:
+            return False
+        ends = [float(np.hypot(*(points[s] - pose.xy).T).max()) for s in (lane.left, lane.right)]
+        return far and min(ends) < SHORT_LANE_M
 
     def extend_ends(self, points: np.ndarray, pose: Pose, lane: Lane,
                     colors: np.ndarray | None = None) -> Lane:

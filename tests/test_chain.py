@@ -239,3 +239,40 @@ def test_a_kept_ring_stays_closed_and_runs_from_the_car():
     assert lane.closed and lane.stats["chain"]["kept_cones"] == cones.shape[0]
     _same(lane, solve_lane(cones, pose, time_limit_s=5.0))
     assert lane.left[0] != 0  # from the car: the ring rolled on
+
+
+def test_a_lane_is_short_when_a_side_stays_within_20_m_of_the_car():
+    from rld.incremental import IncrementalRld
+    from rld.types import Lane
+
+    cones, n = straight(60.0)
+
+    def lane(k_left, k_right, closed=False):
+        return Lane(cones=cones, left=np.arange(k_left), right=n + np.arange(k_right),
+                    status=LaneStatus.OPTIMAL, closed=closed)
+
+    short = IncrementalRld.short
+    assert short(cones, CAR, lane(3, 3))  # both end at x = 7.5 m
+    assert short(cones, CAR, lane(10, 3))  # one side does
+    assert not short(cones, CAR, lane(10, 10))  # both reach x = 32 m
+    assert not short(cones, CAR, lane(3, 3, closed=True))
+    assert short(cones, CAR, Lane.not_found(cones, "none"))
+    near, m = straight(15.0)  # no cone beyond 20 m: nothing to reach
+    assert not short(near, CAR, Lane(cones=near, left=np.arange(2), right=m + np.arange(2),
+                                     status=LaneStatus.OPTIMAL))
+
+
+def test_a_short_lane_gives_way_to_the_wider_windows_lane_and_a_whole_one_does_not():
+    from rld.types import Lane
+
+    cones, n = straight(150.0)
+    solver = LaneSolver("rld", params=CHAINED)
+    method = solver._impl
+    short = Lane(cones=cones, left=np.arange(3), right=n + np.arange(3),
+                 status=LaneStatus.OPTIMAL)
+    lane = method._retry(cones, CAR, short, time.perf_counter(), 5.0, None, None)
+    assert lane.stats.get("retry") and lane.left.size > 10 and lane.right.size > 10
+    np.testing.assert_array_equal(lane.left, np.arange(lane.left.size))  # the truth's prefix
+    whole = solver.solve(cones, CAR, time_limit_s=5.0)
+    assert "retry" not in whole.stats and whole.left.size == n
+    assert method._retry(cones, CAR, whole, time.perf_counter(), 5.0, None, None) is whole
