@@ -78,38 +78,46 @@ def run(method: str = "clc", seeds=(1, 2), ranges=(30.0, 50.0), fp_rates=(0.0, 0
     return [r for part in parts for r in part]
 
 
-def lap_interval(records: list[dict], d: float) -> tuple[float, float, float]:
-    """With minus without the extension, points of the critical rate at ``d`` metres, with
-    the project's paired 95 % lap-bootstrap interval (``bench_color_weights.paired_interval``)."""
+def lap_interval(records: list[dict], d: float, keys=("off", "on")) -> tuple[float, float, float]:
+    """The second view minus the first (``keys``: the records' ``<key>_m`` deviations), points
+    of the critical rate at ``d`` metres, with the project's paired 95 % lap-bootstrap interval
+    (``bench_color_weights.paired_interval``)."""
     from benchmarks.bench_color_weights import paired_interval
 
-    off = [dict(r, deviation_m=r["off_m"]) for r in records]
-    on = [dict(r, deviation_m=r["on_m"]) for r in records]
-    return paired_interval(off, on, d)
+    first = [dict(r, deviation_m=r[f"{keys[0]}_m"]) for r in records]
+    second = [dict(r, deviation_m=r[f"{keys[1]}_m"]) for r in records]
+    return paired_interval(first, second, d)
 
 
-def table(records: list[dict]) -> str:
-    lines = ["| cells | poses | without > 1 / > 0.5 m % | with > 1 / > 0.5 m % | fixed / broken "
-             "(> 1 m; > 0.5 m) | difference, points [95 %] | length without / with (m) | "
-             "gt % without / with |",
-             "|---|---|---|---|---|---|---|---|"]
-    keys = sorted({(r["range_m"], r["fp_rate"]) for r in records})
+def table(records: list[dict], keys=("off", "on"), names=("without", "with"),
+          gt: bool = True) -> str:
+    """Two views of each pose's lane (``keys``, shown as ``names``): both rates pooled and
+    per cell, the poses the second fixed and broke, the paired difference, the lengths and,
+    with ``gt``, the index rule's GT share."""
+    a_, b_ = names
+    lines = [f"| cells | poses | {a_} > 1 / > 0.5 m % | {b_} > 1 / > 0.5 m % | fixed / broken "
+             f"(> 1 m; > 0.5 m) | difference, points [95 %] | length {a_} / {b_} (m) |"
+             + (f" gt % {a_} / {b_} |" if gt else ""),
+             "|---|---|---|---|---|---|---|" + ("---|" if gt else "")]
+    cells = sorted({(r["range_m"], r["fp_rate"]) for r in records})
     for name, sel in [("all", records)] + [
             (f"{k[0]:g} m {k[1]:.0%}", [r for r in records if (r["range_m"], r["fp_rate"]) == k])
-            for k in keys]:
-        a = np.array([r["on_m"] for r in sel])
-        b = np.array([r["off_m"] for r in sel])
+            for k in cells]:
+        a = np.array([r[f"{keys[1]}_m"] for r in sel])
+        b = np.array([r[f"{keys[0]}_m"] for r in sel])
         moved = "; ".join(f"{int(np.sum((b > d) & (a <= d)))} / {int(np.sum((a > d) & (b <= d)))}"
                           for d in (1.0, 0.5))
-        diff = ", ".join("{:+.2f} [{:+.2f}, {:+.2f}]".format(*lap_interval(sel, d))
+        diff = ", ".join("{:+.2f} [{:+.2f}, {:+.2f}]".format(*lap_interval(sel, d, keys))
                          for d in (1.0, 0.5)) if name == "all" else "-"
-        lines.append(
-            f"| {name} | {len(sel)} | {100 * np.mean(b > 1):.2f} / {100 * np.mean(b > 0.5):.2f} | "
-            f"{100 * np.mean(a > 1):.2f} / {100 * np.mean(a > 0.5):.2f} | {moved} | {diff} | "
-            f"{np.mean([r['off_length_m'] for r in sel]):.1f} / "
-            f"{np.mean([r['on_length_m'] for r in sel]):.1f} | "
-            f"{100 * np.mean([r['off_gt'] for r in sel]):.1f} / "
-            f"{100 * np.mean([r['on_gt'] for r in sel]):.1f} |")
+        line = (f"| {name} | {len(sel)} | {100 * np.mean(b > 1):.2f} / "
+                f"{100 * np.mean(b > 0.5):.2f} | {100 * np.mean(a > 1):.2f} / "
+                f"{100 * np.mean(a > 0.5):.2f} | {moved} | {diff} | "
+                f"{np.mean([r[f'{keys[0]}_length_m'] for r in sel]):.1f} / "
+                f"{np.mean([r[f'{keys[1]}_length_m'] for r in sel]):.1f} |")
+        if gt:
+            line += (f" {100 * np.mean([r[f'{keys[0]}_gt'] for r in sel]):.1f} / "
+                     f"{100 * np.mean([r[f'{keys[1]}_gt'] for r in sel]):.1f} |")
+        lines.append(line)
     return "\n".join(lines)
 
 

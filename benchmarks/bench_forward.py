@@ -16,8 +16,6 @@ import argparse
 import json
 import multiprocessing as mp
 
-import numpy as np
-
 
 def _job(args) -> list[dict]:
     """Records of one (seed, range, rate) over the six shared tracks."""
@@ -77,34 +75,16 @@ def run(seeds=(1, 2), ranges=(30.0, 50.0), fp_rates=(0.0, 0.3, 0.5), every: int 
 
 def lap_interval(records: list[dict], d: float) -> tuple[float, float, float]:
     """Forward minus whole, points of the critical rate at ``d`` metres, with the project's
-    paired 95 % lap-bootstrap interval (``bench_color_weights.paired_interval``)."""
-    from benchmarks.bench_color_weights import paired_interval
+    paired 95 % lap-bootstrap interval (``bench_ends.lap_interval``)."""
+    from benchmarks.bench_ends import lap_interval as paired
 
-    whole = [dict(r, deviation_m=r["whole_m"]) for r in records]
-    forward = [dict(r, deviation_m=r["forward_m"]) for r in records]
-    return paired_interval(whole, forward, d)
+    return paired(records, d, ("whole", "forward"))
 
 
 def table(records: list[dict]) -> str:
-    lines = ["| cells | poses | whole > 1 / > 0.5 m % | forward > 1 / > 0.5 m % | fixed / broken "
-             "(> 1 m; > 0.5 m) | difference, points [95 %] | length whole / forward (m) |",
-             "|---|---|---|---|---|---|---|"]
-    keys = sorted({(r["range_m"], r["fp_rate"]) for r in records})
-    for name, sel in [("all", records)] + [
-            (f"{k[0]:g} m {k[1]:.0%}", [r for r in records if (r["range_m"], r["fp_rate"]) == k])
-            for k in keys]:
-        a = np.array([r["forward_m"] for r in sel])
-        b = np.array([r["whole_m"] for r in sel])
-        moved = "; ".join(f"{int(np.sum((b > d) & (a <= d)))} / {int(np.sum((a > d) & (b <= d)))}"
-                          for d in (1.0, 0.5))
-        diff = ", ".join("{:+.2f} [{:+.2f}, {:+.2f}]".format(*lap_interval(sel, d))
-                         for d in (1.0, 0.5)) if name == "all" else "-"
-        lines.append(
-            f"| {name} | {len(sel)} | {100 * np.mean(b > 1):.2f} / {100 * np.mean(b > 0.5):.2f} | "
-            f"{100 * np.mean(a > 1):.2f} / {100 * np.mean(a > 0.5):.2f} | {moved} | {diff} | "
-            f"{np.mean([r['whole_length_m'] for r in sel]):.1f} / "
-            f"{np.mean([r['forward_length_m'] for r in sel]):.1f} |")
-    return "\n".join(lines)
+    from benchmarks.bench_ends import table as paired_table
+
+    return paired_table(records, ("whole", "forward"), ("whole", "forward"), gt=False)
 
 
 def main() -> None:
