@@ -49,8 +49,9 @@ CHAIN_STOPS = ("time budget", "window limit", "no frontier", "no growth", "close
 #: the call has run less than this, seconds (the kept chain carries the rest; 20 Hz).
 #: Chosen by measurement: docs/tuning.md#kept_growth_s.
 KEPT_GROWTH_S = 0.05
-#: ``IncrementalRld.extend_ends`` looks this far from the car and beyond, metres: past the
-#: geometric rule's 20 m, as CLC's (``clc.refine.Refinement.reach_m``). Source: our choice.
+#: Metres from the car, past the geometric rule's 20 m, as CLC's ``Refinement.reach_m``:
+#: ``IncrementalRld.extend_ends`` extends ends beyond it, ``rld``'s short-lane retry judges
+#: within it. Source: our choice.
 END_REACH_M = 25.0
 #: A returned lane with a side whose cones all lie nearer the car than this (metres; the
 #: geometric rule's 20 m) is short: ``rld`` solves again from a wider window (``RETRY_MAX_CONES``).
