@@ -1,7 +1,8 @@
-"""The end extensions (``rld.insertion.extend_ends``, in ``rld`` and CLC): each pose's lane
-scored as returned and as it was before the extension, exactly paired (the same call), one
-``LaneSolver`` per lap, every 2nd pose of the shared tracks. Choosing seeds 0-4, reporting
-seeds 5-9 (DESIGN.md, "Choosing and reporting").
+"""The end extensions (``rld.insertion.extend_ends``, in ``rld`` and CLC) or CLC's lap-start
+rule (``--rule starts``, ``rld.insertion.extend_starts``): each pose's lane scored as returned
+and as it was before the rule, exactly paired (the same call), one ``LaneSolver`` per lap,
+every 2nd pose of the shared tracks. Choosing seeds 0-4, reporting seeds 5-9 (DESIGN.md,
+"Choosing and reporting").
 
     python -m benchmarks.bench_ends --method clc --seeds 1,2 --processes 2
 
@@ -21,11 +22,13 @@ import numpy as np
 
 #: Where each method looks ``extend_ends`` up (the name the spy replaces).
 SPY_MODULE = {"rld": "rld.incremental", "clc": "clc.refine"}
+#: The rules a run can pair: rule -> the function the spy replaces (in ``SPY_MODULE``'s).
+RULES = {"ends": "extend_ends", "starts": "extend_starts"}
 
 
 def _job(args) -> list[dict]:
     """Records of one (method, seed, range, rate) over the six shared tracks."""
-    method, seed, range_m, fp_rate, every = args
+    method, seed, range_m, fp_rate, every, rule = args
     import importlib
 
     from scipy.spatial import cKDTree
@@ -36,14 +39,15 @@ def _job(args) -> list[dict]:
     from rld.tracks import DATASET_TRACKS, find_dataset_dir, load_dataset_track
 
     module = importlib.import_module(SPY_MODULE[method])
-    original = module.extend_ends
+    name = RULES[rule]
+    original = getattr(module, name)
     seen: dict = {}
 
     def spy(points, pose, sides, *args, **kwargs):
         seen["sides"], seen["points"] = [np.array(s) for s in sides], points
         return original(points, pose, sides, *args, **kwargs)
 
-    module.extend_ends = spy
+    setattr(module, name, spy)
     folder = find_dataset_dir()
     out = []
     try:
@@ -66,13 +70,13 @@ def _job(args) -> list[dict]:
                                 on_length_m=a.pred_length_m, off_length_m=b.pred_length_m,
                                 on_gt=a.category == "gt", off_gt=b.category == "gt"))
     finally:
-        module.extend_ends = original  # the pool reuses this process for other jobs
+        setattr(module, name, original)  # the pool reuses this process for other jobs
     return out
 
 
 def run(method: str = "clc", seeds=(1, 2), ranges=(30.0, 50.0), fp_rates=(0.0, 0.3, 0.5),
-        every: int = 2, processes: int = 2) -> list[dict]:
-    jobs = [(method, s, r, f, every) for s in seeds for r in ranges for f in fp_rates]
+        every: int = 2, processes: int = 2, rule: str = "ends") -> list[dict]:
+    jobs = [(method, s, r, f, every, rule) for s in seeds for r in ranges for f in fp_rates]
     with mp.Pool(processes) as pool:
         parts = pool.map(_job, jobs, chunksize=1)
     return [r for part in parts for r in part]
@@ -127,10 +131,14 @@ def main() -> None:
     ap.add_argument("--seeds", default="1,2", help="false-positive seeds, comma-separated")
     ap.add_argument("--every", type=int, default=2, help="every k-th pose (keep it below 5)")
     ap.add_argument("--processes", type=int, default=2, help="worker processes")
+    ap.add_argument("--rule", default="ends", choices=sorted(RULES),
+                    help="the rule paired: end extensions, or CLC's lap-start rule")
+    ap.add_argument("--fp-rates", default="0,0.3,0.5", help="false-positive rates")
     ap.add_argument("--out", default="", help="also write the records to this JSON file")
     a = ap.parse_args()
     recs = run(a.method, seeds=[int(s) for s in a.seeds.split(",")], every=a.every,
-               processes=a.processes)
+               processes=a.processes, rule=a.rule,
+               fp_rates=[float(x) for x in a.fp_rates.split(",")])
     if a.out:
         with open(a.out, "w") as fh:
             json.dump(recs, fh)

@@ -37,7 +37,7 @@ from rld.costs import (
     width_second_differences,
     within_radius,
 )
-from rld.insertion import beside, boundary_edges, extend_ends, insert_cones
+from rld.insertion import beside, boundary_edges, extend_ends, extend_starts, insert_cones
 from rld.types import LaneParams, Pose
 
 __all__ = ["Refinement", "DEFAULT", "refine", "dive_cost", "dive_costs", "jog_positions",
@@ -46,7 +46,7 @@ __all__ = ["Refinement", "DEFAULT", "refine", "dive_cost", "dive_costs", "jog_po
 
 #: What ``refine`` counts, as ``lane.stats`` keys.
 COUNTS = ("dives", "dive_rounds", "short_lane_rounds", "jog_dives", "pair_drops", "dropped",
-          "trimmed_behind", "inserted", "extended")
+          "trimmed_behind", "inserted", "extended", "started_earlier")
 
 
 @dataclass(frozen=True)
@@ -86,6 +86,10 @@ class Refinement:
     end_extensions: bool = True
     """Extend each open boundary's last cone beyond ``reach_m`` from the car where RLD's
     objective prefers it (``rld.insertion.extend_ends``; the search stops short of the map)."""
+    lap_start: bool = True
+    """At the start of a lap (no start pair about the point ``start_lookback_m`` behind the
+    car), begin each open boundary one cone earlier where RLD's objective prefers it
+    (``rld.insertion.extend_starts``; the start pair about the car skips a cone beside it)."""
     judge_color: bool = True
     """The judge's objective includes ``LaneParams.w_color`` times the colour cost when a call
     has colours (RLD's, as the rest of the judge). Chosen: docs/tuning.md#judge_color."""
@@ -99,7 +103,7 @@ Lane4 = tuple  # (left, right, closed, ranker score): the refinement's lane
 
 def refine(points: np.ndarray, pose: Pose, params: LaneParams, res: SearchResult,
            winner: Lane4, score: Callable, colors: np.ndarray | None = None,
-           edits: Refinement = DEFAULT, deadline: float = math.inf
+           edits: Refinement = DEFAULT, deadline: float = math.inf, lap_start: bool = False
            ) -> tuple[Lane4, dict, int, bool]:
     """The stage: dive rounds (when ``res`` is not complete and ``params.contested_margin`` >
     0), closing (IV-E), ring-join drop, trim-behind. ``score(candidates, features)``: the
@@ -122,6 +126,9 @@ def refine(points: np.ndarray, pose: Pose, params: LaneParams, res: SearchResult
     if edits.far_insertions:
         left, right, counts["inserted"] = far_insertions(points, params, left, right,
                                                          bool(closed), edits.reach_m, colors)
+    if not closed and edits.lap_start and lap_start:
+        (left, right), counts["started_earlier"] = extend_starts(points, pose, (left, right),
+                                                                 params, colors)
     if not closed and edits.end_extensions:
         (left, right), counts["extended"] = extend_ends(points, pose, (left, right), params,
                                                         edits.reach_m, colors)

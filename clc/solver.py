@@ -55,12 +55,19 @@ def start_pairs(points: np.ndarray, pose: Pose, params: LaneParams) -> list[tupl
     not behind the car (``clc.refine.trim_behind``). The pairs about the car follow, for a car
     with no cones behind it (the start of a lap); pairs narrower than ``start_min_width_m``
     still come after every wider pair, of either kind."""
+    return _start_pairs(points, pose, params)[0]
+
+
+def _start_pairs(points: np.ndarray, pose: Pose, params: LaneParams
+                 ) -> tuple[list[tuple[int, int]], bool]:
+    """``start_pairs``, and whether none lay about the point behind the car (the start of a
+    lap; always False with ``start_lookback_m`` 0)."""
     k = int(params.start_pairs)
     around = starting_vertex_pairs(points, pose, params.near_radius_m, k,
                                    params.start_min_width_m, params.start_reach_m)
     back = float(params.start_lookback_m)
     if back <= 0:
-        return around
+        return around, False
     h = pose.heading
     behind = Pose(float(pose.x - back * h[0]), float(pose.y - back * h[1]), pose.yaw)
     first = starting_vertex_pairs(points, behind, params.near_radius_m, k,
@@ -70,7 +77,7 @@ def start_pairs(points: np.ndarray, pose: Pose, params: LaneParams) -> list[tupl
     # the order within each group stays).
     w = float(params.start_min_width_m)
     pairs.sort(key=lambda q: bool(np.hypot(*(points[q[0]] - points[q[1]])) < w))
-    return pairs[:k]
+    return pairs[:k], not first
 
 
 def _match(prev_xy: np.ndarray, tree: cKDTree) -> np.ndarray:
@@ -160,7 +167,7 @@ class ClcModel:
         self._colors = colors
         deadline = t0 + time_limit_s if time_limit_s is not None else math.inf
         stats: dict = {"ranker": self.ranker_name, "graph": self.graph, "cut_short": False}
-        pairs = start_pairs(points, pose, self.params)
+        pairs, lap_start = _start_pairs(points, pose, self.params)
         start = pairs[0] if pairs else None
         guide = None
         if self.warm_start and self._prev is not None and start is not None:
@@ -209,7 +216,8 @@ class ClcModel:
         (left, right, closed, score), counts, it, cut = refine(
             points, pose, self.params, res, (left.copy(), right.copy(), closed,
                                              float(scores[best])),
-            lambda c, f: self._score(points, pose, c, f), colors, self.refine, deadline)
+            lambda c, f: self._score(points, pose, c, f), colors, self.refine, deadline,
+            lap_start)
         stats.update(counts, iterations=iterations + it)
         stats["cut_short"] |= cut
         self._prev = (points[left].copy(), points[right].copy())

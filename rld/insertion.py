@@ -19,8 +19,11 @@ from rld.costs import lane_cost
 from rld.types import LaneParams, Pose
 
 __all__ = ["boundary_edges", "beside", "insertion_delta", "insert_cones", "extend_ends",
-           "MAX_END_CONES"]
+           "extend_starts", "MAX_END_CONES", "START_LINE_M"]
 
+#: ``extend_starts``: a cone farther than this (metres) from the line of a boundary's first edge
+#: does not begin it (false positives beside the car). Chosen: docs/tuning.md#lap_start.
+START_LINE_M = 1.0
 #: No colours: the kernel's empty label array.
 _NO_LABELS = np.zeros(0, dtype=np.int64)
 
@@ -193,5 +196,45 @@ def extend_ends(points: np.ndarray, pose: Pose, sides: Sequence[np.ndarray],
                     count += 1
                     break
             if not added:
+                break
+    return sides, count
+
+
+def extend_starts(points: np.ndarray, pose: Pose, sides: Sequence[np.ndarray],
+                  params: LaneParams, colors: np.ndarray | None = None
+                  ) -> tuple[list[np.ndarray], int]:
+    """Each open boundary (left, right) begun one cone earlier: by the map cone within
+    ``max_cone_spacing_m`` of its first, between the car's line across and it along the heading,
+    at most ``START_LINE_M`` off its first edge's line, that lowers RLD's objective most
+    (``lane_cost``, eq. 29) where the lane stays feasible (less w_max). Returns (sides, added)."""
+    sides = [np.asarray(S, dtype=np.int64).copy() for S in sides]
+    if min(S.size for S in sides) < 2:
+        return sides, 0
+    along = (points - pose.xy) @ pose.heading
+    tree = cKDTree(points)
+    count = 0
+    for s_i in (0, 1):
+        S = sides[s_i]
+        near = np.asarray(tree.query_ball_point(points[S[0]], params.max_cone_spacing_m),
+                          dtype=np.int64)
+        d = points[S[1]] - points[S[0]]
+        d = d / max(float(np.hypot(*d)), 1e-12)
+        v = points[near] - points[S[0]]
+        off = np.abs(d[0] * v[:, 1] - d[1] * v[:, 0])  # from the first edge's line
+        cand = np.setdiff1d(near[(along[near] >= 0) & (along[near] < along[S[0]])
+                                 & (off <= START_LINE_M)], np.concatenate(sides))
+        if cand.size == 0:
+            continue
+        base = lane_cost(points, S, [], pose, params, colors=colors)
+        trials = [np.r_[c, S] for c in cand]
+        deltas = [lane_cost(points, T, [], pose, params, colors=colors) - base for T in trials]
+        for k in np.argsort(deltas, kind="stable"):
+            if deltas[k] >= -1e-9:
+                break
+            new = list(sides)
+            new[s_i] = trials[k]
+            if lane_is_feasible(points[new[0]], points[new[1]], params, max_width=False):
+                sides = new
+                count += 1
                 break
     return sides, count

@@ -1213,6 +1213,27 @@ def test_start_pairs_look_behind_the_car_first():
     assert start_pairs(narrow, car, LaneParams(start_lookback_m=6.0)) == got[:4]
 
 
+def test_lap_start_begins_a_side_at_the_cone_beside_the_car():
+    """The start of a lap (no cone behind the car): the start pair about the car is the two
+    cones 3 m ahead (the most symmetric), so the search begins the right side past the cone
+    beside the car; ``Refinement.lap_start`` begins it there (``extend_starts``), and only
+    when no start pair lies about the point behind the car."""
+    from clc.refine import Refinement
+    xs = np.arange(3.0, 40.0, 3.0)
+    pts = np.vstack([np.column_stack([xs, np.full(xs.size, 2.0)]),
+                     np.column_stack([xs, np.full(xs.size, -2.0)]), [[0.2, -2.0]]])
+    beside = pts.shape[0] - 1
+    car = Pose(0.0, 0.0, 0.0)
+    on = LaneSolver("clc").solve(pts, car)
+    off = LaneSolver("clc", options={"refine": Refinement(lap_start=False)}).solve(pts, car)
+    assert off.ok and off.right[0] == xs.size  # the right side's cone at x = 3
+    assert on.right.tolist() == [beside] + off.right.tolist()
+    assert on.left.tolist() == off.left.tolist() and on.stats["started_earlier"] == 1
+    # With cones behind the car (3 m back and more), no lap start: the rule does not run.
+    back = np.vstack([pts, [[-3.0, 2.0], [-3.0, -2.0], [-6.0, 2.0], [-6.0, -2.0]]])
+    assert LaneSolver("clc").solve(back, car).stats["started_earlier"] == 0
+
+
 def test_start_lookback_takes_the_true_first_cone_track1(dataset_dir):
     """Track 1 at R = 30 m, 30 % false positives, seed 4, pose 131: about the car, the start
     pair takes a false positive 0.63 m outside the true first right cone, and the lane leaves

@@ -17,6 +17,7 @@ from rld.insertion import (
     beside,
     boundary_edges,
     extend_ends,
+    extend_starts,
     insert_cones,
     insertion_delta,
 )
@@ -240,3 +241,66 @@ def test_extension_matches_brute_force_and_never_raises_the_objective(cut_l, cut
         if d < best and lane_is_feasible(pts[trial], pts[right], P, max_width=False):
             best, best_c = d, c
     assert L1.tolist() == (left.tolist() if best_c is None else left.tolist() + [best_c])
+
+
+# -- lap starts (rld.insertion.extend_starts) ------------------------------------------------
+
+START_CAR = Pose(0.0, 0.0, 0.0)  # beside the boundaries' first cones (x = 0), heading along +x
+
+
+def test_a_boundary_begun_past_the_cone_beside_the_car_is_begun_there():
+    n = XS.size
+    # Both sides begin at x = 3.5; the cones at x = 0 (beside the car, not behind it) are on
+    # their lines and cheaper by the objective (one more edge, no turn).
+    pts, left, right = _straight(range(1, n), range(n + 1, 2 * n))
+    (L, R), count = extend_starts(pts, START_CAR, (left, right), P)
+    assert count == 2 and L.tolist() == list(range(n)) and R.tolist() == list(range(n, 2 * n))
+    assert lane_cost(pts, L, R, START_CAR, P) < lane_cost(pts, left, right, START_CAR, P)
+
+
+def test_no_cone_behind_the_car_or_off_the_first_edge_begins_a_boundary():
+    n = XS.size
+    # The car 0.5 m past the first cones: they lie behind it.
+    pts, left, right = _straight(range(1, n), range(n + 1, 2 * n))
+    assert extend_starts(pts, Pose(0.5, 0.0, 0.0), (left, right), P)[1] == 0
+    # Only cones beside the car 1.5 m outside each line (x = 0.5, y = +-3.5): a boundary's
+    # line runs at y = +-2, farther than START_LINE_M (1 m); 0.5 m outside, taken.
+    xs = XS[1:]
+    pts = np.vstack([np.column_stack([xs, np.full(xs.size, 2.0)]),
+                     np.column_stack([xs, np.full(xs.size, -2.0)]),
+                     [[0.5, 3.5], [0.5, -3.5], [0.5, 2.5]]])
+    m = xs.size
+    left, right = np.arange(m), np.arange(m, 2 * m)
+    (L, R), count = extend_starts(pts, START_CAR, (left, right), P)
+    assert count == 1 and L[0] == 2 * m + 2 and R.tolist() == right.tolist()
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**31 - 1))
+def test_lap_start_matches_brute_force_and_never_raises_the_objective(seed):
+    # Random cones about a straight lane begun at x = 3.5: the left side's choice against
+    # trying every map cone by hand (the right side's first cone as it stands).
+    rng = np.random.default_rng(seed)
+    n = XS.size
+    extra = np.column_stack([rng.uniform(-2, 5, 8), rng.uniform(-4, 4, 8)])
+    pts, left, right = _straight(range(1, n), range(n + 1, 2 * n), extra)
+    car = Pose(0.0, 0.0, float(rng.uniform(-0.2, 0.2)))
+    (L, R), count = extend_starts(pts, car, (left, right), P)
+    assert lane_cost(pts, L, R, car, P) <= lane_cost(pts, left, right, car, P) + 1e-9
+    assert count == 0 or lane_is_feasible(pts[L], pts[R], P, max_width=False)
+    used = set(left.tolist()) | set(right.tolist())
+    along = (pts - car.xy) @ car.heading
+    d = pts[left[1]] - pts[left[0]]
+    d = d / np.hypot(*d)
+    best, best_c = -1e-9, None
+    base = lane_cost(pts, left, [], car, P)
+    for c in range(pts.shape[0]):
+        v = pts[c] - pts[left[0]]
+        if (c in used or np.hypot(*v) > P.max_cone_spacing_m or not 0 <= along[c] < along[left[0]]
+                or abs(d[0] * v[1] - d[1] * v[0]) > 1.0):
+            continue
+        trial = np.r_[c, left]
+        delta = lane_cost(pts, trial, [], car, P) - base
+        if delta < best and lane_is_feasible(pts[trial], pts[right], P, max_width=False):
+            best, best_c = delta, c
+    assert (L[0] == best_c) if best_c is not None else L.tolist() == left.tolist()
