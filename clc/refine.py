@@ -29,6 +29,7 @@ from clc.search import SearchGraph, SearchResult, closable, enumerate_candidates
 from rld import geometry as geo
 from rld.constraints import lane_is_feasible
 from rld.costs import (
+    REACH_M,
     lane_cost,
     open_path_costs,
     ranking_features,
@@ -72,7 +73,7 @@ class Refinement:
     """Two consecutive boundary cones nearer than this (metres) are a close pair."""
     dive_iterations: int = 40
     """Iterations of each dive beyond rebuilding the lane it follows."""
-    reach_m: float = 25.0
+    reach_m: float = REACH_M
     """Metres of path ahead of the car within which close calls are revisited and the judge
     counts (the protocol's critical distance is 20 m)."""
     ring_join: bool = True

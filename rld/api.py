@@ -124,8 +124,8 @@ class _RldMethod:
         """A short lane (``IncrementalRld.short``) against a stateless chain from the car's
         window of ``RETRY_MAX_CONES`` cones, within the call's budget: the one RLD's objective
         (eq. 29) prefers within 25 m of the car wins (``lane_cost(radius_m=...)``)."""
-        from rld.costs import lane_cost
-        from rld.incremental import END_REACH_M, RETRY_MAX_CONES
+        from rld.costs import REACH_M, lane_cost
+        from rld.incremental import RETRY_MAX_CONES
         from rld.solver import RldModel
 
         left = budget - (time.perf_counter() - t0)
@@ -146,7 +146,7 @@ class _RldMethod:
 
         def near_cost(x: Lane) -> float:
             return -np.inf if x.closed else lane_cost(points, x.left, x.right, pose, p,
-                                                      colors=colors, radius_m=END_REACH_M)
+                                                      colors=colors, radius_m=REACH_M)
 
         if lane.ok and near_cost(view) >= near_cost(lane):
             return lane

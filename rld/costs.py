@@ -29,6 +29,7 @@ __all__ = [
     "lane_cost",
     "within_radius",
     "reach_costs",
+    "REACH_M",
     "open_path_costs",
     "color_cost",
     "boundary_color_cost",
@@ -41,6 +42,12 @@ __all__ = [
     "ranking_features",
     "FEATURE_NAMES",
 ]
+
+#: Metres from the car, past the geometric rule's 20 m, within which a lane is judged by RLD's
+#: objective (``reach_costs``): CLC's refinement (``Refinement.reach_m``) and ``rld``'s
+#: short-lane retry; beyond it both extend a lane's far ends (``rld.insertion.extend_ends``).
+#: Source: our choice.
+REACH_M = 25.0
 
 #: The CLC ranking features (section VII), in the order of ``ranking_features``.
 FEATURE_NAMES = (

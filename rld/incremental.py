@@ -20,7 +20,7 @@ from rld.constraints import (
     lane_is_feasible,
     width_conflicts,
 )
-from rld.costs import lane_cost
+from rld.costs import REACH_M, lane_cost
 from rld.insertion import boundary_edges as _edges
 from rld.insertion import extend_ends, insert_cones
 from rld.solver import MATCH_TOLERANCE_M, RldModel
@@ -49,10 +49,6 @@ CHAIN_STOPS = ("time budget", "window limit", "no frontier", "no growth", "close
 #: the call has run less than this, seconds (the kept chain carries the rest; 20 Hz).
 #: Chosen by measurement: docs/tuning.md#kept_growth_s.
 KEPT_GROWTH_S = 0.05
-#: Metres from the car, past the geometric rule's 20 m, as CLC's ``Refinement.reach_m``:
-#: ``IncrementalRld.extend_ends`` extends ends beyond it, ``rld``'s short-lane retry judges
-#: within it. Source: our choice.
-END_REACH_M = 25.0
 #: A returned lane with a side whose cones all lie nearer the car than this (metres; the
 #: geometric rule's 20 m) is short: ``rld`` solves again from a wider window (``RETRY_MAX_CONES``).
 #: Chosen by measurement: docs/tuning.md#short_lane_retry.
@@ -451,13 +447,13 @@ class IncrementalRld:
 
     def extend_ends(self, points: np.ndarray, pose: Pose, lane: Lane,
                     colors: np.ndarray | None = None) -> Lane:
-        """An open ``lane``'s boundaries extended at their far ends, beyond ``END_REACH_M``
+        """An open ``lane``'s boundaries extended at their far ends, beyond ``REACH_M``
         from the car, where RLD's objective prefers it (``rld.insertion.extend_ends``), its
         cost recomputed; ``stats["chain"]["extended"]`` counts the cones added."""
         if not lane.ok or lane.closed:
             return lane
         (L, R), n = extend_ends(points, pose, (lane.left, lane.right), self.params,
-                                END_REACH_M, colors)
+                                REACH_M, colors)
         if not n:
             return lane
         stats = dict(lane.stats)
