@@ -181,23 +181,27 @@ def extend_ends(points: np.ndarray, pose: Pose, sides: Sequence[np.ndarray],
             cand = np.setdiff1d(near[far[near]], np.concatenate(sides))
             if cand.size == 0:
                 break
-            base = lane_cost(points, S, [], pose, params, colors=colors)
-            trials = [np.r_[S, c] for c in cand]
-            deltas = [lane_cost(points, T, [], pose, params, colors=colors) - base
-                      for T in trials]
-            added = False
-            for k in np.argsort(deltas, kind="stable"):
-                if deltas[k] >= -1e-9:
-                    break
-                new = list(sides)
-                new[s_i] = trials[k]
-                if lane_is_feasible(points[new[0]], points[new[1]], params, max_width=False):
-                    sides, added = new, True
-                    count += 1
-                    break
-            if not added:
+            new = _cheapest(points, pose, sides, s_i, [np.r_[S, c] for c in cand], params,
+                            colors)
+            if new is None:
                 break
+            sides, count = new, count + 1
     return sides, count
+
+
+def _cheapest(points, pose, sides, s_i, trials, params, colors):
+    """``sides`` with side ``s_i`` replaced by the trial that lowers its ``lane_cost`` most
+    where ``lane_is_feasible`` (less w_max) holds, or None when none lowers it so."""
+    base = lane_cost(points, sides[s_i], [], pose, params, colors=colors)
+    deltas = [lane_cost(points, T, [], pose, params, colors=colors) - base for T in trials]
+    for k in np.argsort(deltas, kind="stable"):
+        if deltas[k] >= -1e-9:
+            return None
+        new = list(sides)
+        new[s_i] = trials[k]
+        if lane_is_feasible(points[new[0]], points[new[1]], params, max_width=False):
+            return new
+    return None
 
 
 def extend_starts(points: np.ndarray, pose: Pose, sides: Sequence[np.ndarray],
@@ -223,18 +227,7 @@ def extend_starts(points: np.ndarray, pose: Pose, sides: Sequence[np.ndarray],
         off = np.abs(d[0] * v[:, 1] - d[1] * v[:, 0])  # from the first edge's line
         cand = np.setdiff1d(near[(along[near] >= 0) & (along[near] < along[S[0]])
                                  & (off <= START_LINE_M)], np.concatenate(sides))
-        if cand.size == 0:
-            continue
-        base = lane_cost(points, S, [], pose, params, colors=colors)
-        trials = [np.r_[c, S] for c in cand]
-        deltas = [lane_cost(points, T, [], pose, params, colors=colors) - base for T in trials]
-        for k in np.argsort(deltas, kind="stable"):
-            if deltas[k] >= -1e-9:
-                break
-            new = list(sides)
-            new[s_i] = trials[k]
-            if lane_is_feasible(points[new[0]], points[new[1]], params, max_width=False):
-                sides = new
-                count += 1
-                break
+        new = _cheapest(points, pose, sides, s_i, [np.r_[c, S] for c in cand], params, colors)
+        if new is not None:
+            sides, count = new, count + 1
     return sides, count
