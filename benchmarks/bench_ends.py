@@ -1,5 +1,6 @@
-"""The end extensions (``rld.insertion.extend_ends``, in ``rld`` and CLC) or CLC's lap-start
-rule (``--rule starts``, ``rld.insertion.extend_starts``): each pose's lane scored as returned
+"""A lane edit of ``rld.insertion`` (``--rule``): the end extensions (``extend_ends``, in ``rld``
+and CLC), CLC's lap-start rule (``starts``, ``extend_starts``) or the swaps (``swaps``,
+``swap_cones``, in ``rld`` and CLC): each pose's lane scored as returned
 and as it was before the rule, exactly paired (the same call), one ``LaneSolver`` per lap,
 every 2nd pose of the shared tracks. Choosing seeds 0-4, reporting seeds 5-9 (DESIGN.md,
 "Choosing and reporting").
@@ -20,10 +21,11 @@ import multiprocessing as mp
 
 import numpy as np
 
-#: Where each method looks ``extend_ends`` up (the name the spy replaces).
-SPY_MODULE = {"rld": "rld.incremental", "clc": "clc.refine"}
-#: The rules a run can pair: rule -> the function the spy replaces (in ``SPY_MODULE``'s).
-RULES = {"ends": "extend_ends", "starts": "extend_starts"}
+#: The rules a run can pair: rule -> (the function the spy replaces, {method: the module
+#: where that method looks it up}).
+RULES = {"ends": ("extend_ends", {"rld": "rld.incremental", "clc": "clc.refine"}),
+         "starts": ("extend_starts", {"clc": "clc.refine"}),
+         "swaps": ("swap_cones", {"rld": "rld.insertion", "clc": "clc.refine"})}
 
 
 def _job(args) -> list[dict]:
@@ -38,8 +40,10 @@ def _job(args) -> list[dict]:
     from rld.simulation import simulate_lap
     from rld.tracks import DATASET_TRACKS, find_dataset_dir, load_dataset_track
 
-    module = importlib.import_module(SPY_MODULE[method])
-    name = RULES[rule]
+    name, modules = RULES[rule]
+    if method not in modules:
+        raise ValueError(f"rule {rule!r} is not in method {method!r}")
+    module = importlib.import_module(modules[method])
     original = getattr(module, name)
     seen: dict = {}
 
@@ -127,7 +131,7 @@ def table(records: list[dict], keys=("off", "on"), names=("without", "with"),
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--method", default="clc", choices=sorted(SPY_MODULE))
+    ap.add_argument("--method", default="clc", choices=["clc", "rld"])
     ap.add_argument("--seeds", default="1,2", help="false-positive seeds, comma-separated")
     ap.add_argument("--every", type=int, default=2, help="every k-th pose (keep it below 5)")
     ap.add_argument("--processes", type=int, default=2, help="worker processes")

@@ -38,7 +38,14 @@ from rld.costs import (
     width_second_differences,
     within_radius,
 )
-from rld.insertion import beside, boundary_edges, extend_ends, extend_starts, insert_cones
+from rld.insertion import (
+    beside,
+    boundary_edges,
+    extend_ends,
+    extend_starts,
+    insert_cones,
+    swap_cones,
+)
 from rld.types import LaneParams, Pose
 
 __all__ = ["Refinement", "DEFAULT", "refine", "dive_cost", "dive_costs", "jog_positions",
@@ -47,7 +54,7 @@ __all__ = ["Refinement", "DEFAULT", "refine", "dive_cost", "dive_costs", "jog_po
 
 #: What ``refine`` counts, as ``lane.stats`` keys.
 COUNTS = ("dives", "dive_rounds", "short_lane_rounds", "jog_dives", "pair_drops", "dropped",
-          "trimmed_behind", "inserted", "extended", "started_earlier")
+          "trimmed_behind", "inserted", "extended", "started_earlier", "swapped")
 
 
 @dataclass(frozen=True)
@@ -91,6 +98,9 @@ class Refinement:
     """At the start of a lap (no start pair about the point ``start_lookback_m`` behind the
     car), begin each open boundary one cone earlier where RLD's objective prefers it
     (``rld.insertion.extend_starts``; the start pair about the car skips a cone beside it)."""
+    swaps: bool = True
+    """Swap one cone within ``reach_m`` for an unused map cone beside it where the judge prefers
+    it (``rld.insertion.swap_cones``; a false positive near the line taken for a true cone)."""
     judge_color: bool = True
     """The judge's objective includes ``LaneParams.w_color`` times the colour cost when a call
     has colours (RLD's, as the rest of the judge). Chosen: docs/tuning.md#judge_color."""
@@ -133,6 +143,9 @@ def refine(points: np.ndarray, pose: Pose, params: LaneParams, res: SearchResult
     if not closed and edits.end_extensions:
         (left, right), counts["extended"] = extend_ends(points, pose, (left, right), params,
                                                         edits.reach_m, colors)
+    if not closed and edits.swaps:
+        (left, right), counts["swapped"] = swap_cones(points, pose, (left, right), params,
+                                                      edits.reach_m, colors)
     return (left, right, bool(closed), value), counts, iterations, cut
 
 

@@ -118,7 +118,7 @@ class _RldMethod:
                                             colors)
         if self.chainer.short(points, pose, lane):
             lane = self._retry(points, pose, lane, t0, budget, colors, confidence)
-        return lane
+        return _swapped(points, pose, lane, self.model.params, colors)
 
     def _retry(self, points, pose, lane, t0, budget, colors, confidence) -> Lane:
         """A short lane (``IncrementalRld.short``) against a stateless chain from the car's
@@ -184,6 +184,24 @@ class _RldIncrementalMethod:
     def solve(self, points, pose, colors=None, time_limit_s=None, confidence=None) -> Lane:
         return self.model.solve(points, pose, time_limit_s=time_limit_s, colors=colors,
                                 confidence=confidence)
+
+
+def _swapped(points, pose, lane: Lane, params: LaneParams, colors) -> Lane:
+    """``rld``'s open ``lane`` with one cone near the car swapped where CLC's judge prefers it
+    (``rld.insertion.swap_cones``, as CLC's refinement does), its cost recomputed; the kept
+    chain is not touched. ``stats["swapped"]`` counts the swap."""
+    from rld import insertion
+    from rld.costs import REACH_M, lane_cost
+
+    if not lane.ok or lane.closed:
+        return lane
+    (L, R), n = insertion.swap_cones(points, pose, (lane.left, lane.right), params, REACH_M,
+                                     colors)
+    if not n:
+        return lane
+    return Lane(cones=points, left=L, right=R, status=lane.status, message=lane.message,
+                cost=lane_cost(points, L, R, pose, params, colors=colors),
+                stats=dict(lane.stats, swapped=n))
 
 
 class _ClcMethod:

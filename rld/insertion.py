@@ -1,8 +1,10 @@
 """Cone insertion into a found lane: a cone beside an edge (a, b) of a boundary joins it as
 a -> c -> b when that lowers RLD's objective (eq. 29, the shared ``lane_cost``) and breaks no
-constraint; a boundary's far end extended by a map cone so (``extend_ends``). The one home of the
-rules for the incremental solver's late insertions (``rld.incremental``) and CLC's far insertions
-and end extensions (``clc.refine``, ``rld.api``); ours, in neither paper.
+constraint; a boundary's far end extended by a map cone so (``extend_ends``), a lap's first cone
+(``extend_starts``); a cone near the car swapped for a map cone beside it where CLC's judge
+prefers it (``swap_cones``). The one home of the rules for the incremental solver's late
+insertions (``rld.incremental``) and CLC's far insertions, end extensions and swaps
+(``clc.refine``, ``rld.api``); ours, in neither paper.
 """
 
 from __future__ import annotations
@@ -15,15 +17,18 @@ from scipy.spatial import cKDTree
 
 from rld import insertion_kernels as ik
 from rld.constraints import blocked_by_fixed, lane_is_feasible
-from rld.costs import lane_cost
+from rld.costs import lane_cost, reach_costs, within_radius
 from rld.types import LaneParams, Pose
 
 __all__ = ["boundary_edges", "beside", "insertion_delta", "insert_cones", "extend_ends",
-           "extend_starts", "MAX_END_CONES", "START_LINE_M"]
+           "extend_starts", "swap_cones", "MAX_END_CONES", "START_LINE_M", "SWAP_RADIUS_M"]
 
 #: ``extend_starts``: a cone farther than this (metres) from the line of a boundary's first edge
 #: does not begin it (false positives beside the car). Chosen: docs/tuning.md#lap_start.
 START_LINE_M = 1.0
+#: ``swap_cones``: a boundary cone may give way to an unused map cone this near it, metres.
+#: Chosen by measurement: docs/tuning.md#swap_cones.
+SWAP_RADIUS_M = 1.5
 #: No colours: the kernel's empty label array.
 _NO_LABELS = np.zeros(0, dtype=np.int64)
 
@@ -231,3 +236,35 @@ def extend_starts(points: np.ndarray, pose: Pose, sides: Sequence[np.ndarray],
         if new is not None:
             sides, count = new, count + 1
     return sides, count
+
+
+def swap_cones(points: np.ndarray, pose: Pose, sides: Sequence[np.ndarray], params: LaneParams,
+               reach_m: float, colors: np.ndarray | None = None) -> tuple[list[np.ndarray], int]:
+    """The open lane (left, right) with at most one cone swapped: of the lanes with one cone
+    within ``reach_m`` (``within_radius``; not a boundary's first) replaced by an unused map
+    cone within ``SWAP_RADIUS_M``, the one CLC's judge prefers most (``reach_costs``: eq. 29
+    plus the width roughness), if it beats the lane and stays feasible (less w_max)."""
+    sides = [np.asarray(S, dtype=np.int64).copy() for S in sides]
+    if min(S.size for S in sides) < 2:
+        return sides, 0
+    tree = cKDTree(points)
+    used = set(np.concatenate(sides).tolist())
+    trials = []
+    for s_i, S in enumerate(sides):
+        for j in range(1, within_radius(points, S, pose, reach_m).size):
+            for c in tree.query_ball_point(points[S[j]], SWAP_RADIUS_M):
+                if c not in used:
+                    new = list(sides)
+                    new[s_i] = S.copy()
+                    new[s_i][j] = c
+                    trials.append(new)
+    if not trials:
+        return sides, 0
+    costs = reach_costs(points, pose, params, [sides, *trials], reach_m, colors)
+    for k in np.argsort(costs[1:], kind="stable"):
+        if costs[1 + k] >= costs[0] - 1e-9:
+            break
+        L, R = trials[k]
+        if lane_is_feasible(points[L], points[R], params, max_width=False):
+            return trials[k], 1
+    return sides, 0

@@ -1234,6 +1234,41 @@ def test_lap_start_begins_a_side_at_the_cone_beside_the_car():
     assert LaneSolver("clc").solve(back, car).stats["started_earlier"] == 0
 
 
+def test_swaps_are_wired_into_rld_and_clc(monkeypatch):
+    """``rld``'s returned lane and CLC's refinement end with ``rld.insertion.swap_cones``: a
+    lane on a false positive 0.7 m inside the left line beside the true cone at x = 10.5 gets
+    the true cone back (``rld.api._swapped``); CLC returns what the swap returns, and with
+    ``Refinement(swaps=False)`` never calls it."""
+    import clc.refine as refine_module
+    from clc.refine import Refinement
+    from rld.api import _swapped
+    from rld.types import Lane
+    xs = np.arange(0.0, 40.0, 3.5)
+    pts = np.vstack([np.column_stack([xs, np.full(xs.size, 2.0)]),
+                     np.column_stack([xs, np.full(xs.size, -2.0)]), [[10.5, 1.3]]])
+    car = Pose(1.0, 0.0, 0.0)
+    fp, n = pts.shape[0] - 1, xs.size
+    bad = np.arange(n)
+    bad[3] = fp
+    lane = _swapped(pts, car, Lane(cones=pts, left=bad, right=np.arange(n, 2 * n),
+                                   status=LaneStatus.FEASIBLE),
+                    LaneParams(), None)
+    assert lane.left.tolist() == list(range(n)) and lane.stats["swapped"] == 1
+    calls = []
+
+    def spy(points, pose, sides, params, reach_m, colors=None):
+        calls.append(reach_m)
+        L, R = (np.asarray(x) for x in sides)
+        return [L[:-1], R], 1  # a visible change: the left side's last cone dropped
+
+    monkeypatch.setattr(refine_module, "swap_cones", spy)
+    plain = LaneSolver("clc", options={"refine": Refinement(swaps=False)}).solve(pts, car)
+    assert not calls and plain.stats["swapped"] == 0
+    got = LaneSolver("clc").solve(pts, car)
+    assert calls == [25.0] and got.stats["swapped"] == 1
+    assert got.left.tolist() == plain.left[:-1].tolist()
+
+
 def test_start_lookback_takes_the_true_first_cone_track1(dataset_dir):
     """Track 1 at R = 30 m, 30 % false positives, seed 4, pose 131: about the car, the start
     pair takes a false positive 0.63 m outside the true first right cone, and the lane leaves

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from clc.refine import far_insertions
 from rld import geometry as geo
 from rld.constraints import lane_is_feasible
-from rld.costs import boundary_color_cost, lane_cost
+from rld.costs import boundary_color_cost, lane_cost, reach_costs, within_radius
 from rld.insertion import (
     _objective_deltas,
     beside,
@@ -20,6 +20,7 @@ from rld.insertion import (
     extend_starts,
     insert_cones,
     insertion_delta,
+    swap_cones,
 )
 from rld.types import LaneParams, Pose
 
@@ -304,3 +305,79 @@ def test_lap_start_matches_brute_force_and_never_raises_the_objective(seed):
         if delta < best and lane_is_feasible(pts[trial], pts[right], P, max_width=False):
             best, best_c = delta, c
     assert (L[0] == best_c) if best_c is not None else L.tolist() == left.tolist()
+
+
+# -- swaps (rld.insertion.swap_cones) --------------------------------------------------------
+
+
+def test_a_false_positive_taken_for_a_true_cone_near_the_car_gives_way_to_it():
+    n = XS.size
+    # The left side takes a cone 0.7 m inside its line at x = 10.5 (index 2n) for the true one
+    # (index 3); the true cone is unused, 0.7 m away: the judge prefers it (no width jog).
+    pts, left, right = _straight(range(n), range(n, 2 * n), extra=[[10.5, 1.3]])
+    left = left.copy()
+    left[3] = 2 * n
+    (L, R), count = swap_cones(pts, CAR, (left, right), P, 25.0)
+    assert count == 1 and L.tolist() == list(range(n)) and R.tolist() == right.tolist()
+    got, before = reach_costs(pts, CAR, P, [(L, R), (left, right)], 25.0)
+    assert got < before
+
+
+def test_a_true_lane_keeps_its_cones_and_only_cones_near_the_car_move():
+    n = XS.size
+    # A false positive 0.7 m inside the left line beside each cone: the true lane stays.
+    extra = np.column_stack([XS, np.full(XS.size, 1.3)])
+    pts, left, right = _straight(range(n), range(n, 2 * n), extra)
+    (L, R), count = swap_cones(pts, CAR, (left, right), P, 25.0)
+    assert count == 0 and L.tolist() == left.tolist()
+    # The left side on the false positives from x = 31.5 on (30.5 m from the car and more),
+    # past the first cone beyond 25 m (x = 28, which ``within_radius`` keeps): nothing moves;
+    # within 40 m the first of them gives way.
+    bad = left.copy()
+    bad[9:] = 2 * n + np.arange(9, n)
+    assert swap_cones(pts, CAR, (bad, right), P, 25.0)[1] == 0
+    (L, _), count = swap_cones(pts, CAR, (bad, right), P, 40.0)
+    assert count == 1 and int(np.sum(L != bad)) == 1
+    # A boundary's first cone never moves: the left one on a false positive stays.
+    first = left.copy()
+    first[0] = 2 * n
+    (L, _), _ = swap_cones(pts, CAR, (first, right), P, 25.0)
+    assert L[0] == 2 * n
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**31 - 1))
+def test_swap_matches_brute_force_and_never_raises_the_judge(seed):
+    # Random cones about the straight lane, the left side on a random one of them near its
+    # cone 2: the swap against every single-cone swap tried by hand.
+    rng = np.random.default_rng(seed)
+    n = XS.size
+    extra = np.column_stack([rng.uniform(0, 30, 14), rng.uniform(-3, 3, 14)])
+    pts, left, right = _straight(range(n), range(n, 2 * n), extra)
+    left, right = left.copy(), right.copy()
+    k = 2 * n + int(np.argmin(np.hypot(*(extra - pts[2]).T)))
+    if np.hypot(*(pts[k] - pts[2])) < 1.5:
+        left[2] = k
+    car = Pose(1.0, 0.0, float(rng.uniform(-0.2, 0.2)))
+    (L, R), count = swap_cones(pts, car, (left, right), P, 25.0)
+    base = reach_costs(pts, car, P, [(left, right)], 25.0)[0]
+    assert reach_costs(pts, car, P, [(L, R)], 25.0)[0] <= base + 1e-9
+    used = set(left.tolist()) | set(right.tolist())
+    best, best_lane = base - 1e-9, None
+    for s_i, S in enumerate((left, right)):
+        for j in range(1, within_radius(pts, S, car, 25.0).size):
+            for c in range(pts.shape[0]):
+                if c in used or np.hypot(*(pts[c] - pts[S[j]])) > 1.5:
+                    continue
+                T = S.copy()
+                T[j] = c
+                lane = (T, right) if s_i == 0 else (left, T)
+                v = reach_costs(pts, car, P, [lane], 25.0)[0]
+                if v < best and lane_is_feasible(pts[lane[0]], pts[lane[1]], P,
+                                                 max_width=False):
+                    best, best_lane = v, lane
+    if best_lane is None:
+        assert count == 0 and L.tolist() == left.tolist() and R.tolist() == right.tolist()
+    else:
+        assert count == 1
+        assert reach_costs(pts, car, P, [(L, R)], 25.0)[0] == pytest.approx(best, abs=1e-9)
