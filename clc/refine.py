@@ -117,9 +117,10 @@ def refine(points: np.ndarray, pose: Pose, params: LaneParams, res: SearchResult
            edits: Refinement = DEFAULT, deadline: float = math.inf, lap_start: bool = False
            ) -> tuple[Lane4, dict, int, bool]:
     """The stage: dive rounds (when ``res`` is not complete and ``params.contested_margin`` >
-    0), closing (IV-E), ring-join drop, trim-behind. ``score(candidates, features)``: the
-    ranker's; ``colors`` reach the judge only with ``edits.judge_color``. Returns (lane,
-    ``COUNTS``, dive iterations, cut short by ``deadline``)."""
+    0), closing (IV-E), ring-join drop, trim-behind, far insertions, a lap's first cones (when
+    ``lap_start``: no start pair behind the car), end extensions, swaps. ``score(candidates,
+    features)``: the ranker's; ``colors`` reach the judge only with ``edits.judge_color``.
+    Returns (lane, ``COUNTS``, dive iterations, cut short by ``deadline``)."""
     counts = dict.fromkeys(COUNTS, 0)
     iterations, cut = 0, False
     colors = colors if edits.judge_color else None  # the judge's; the search has its own
