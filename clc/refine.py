@@ -29,6 +29,7 @@ from clc.search import SearchGraph, SearchResult, closable, enumerate_candidates
 from rld import geometry as geo
 from rld.constraints import lane_is_feasible
 from rld.costs import (
+    JOG_THRESHOLD_M,
     REACH_M,
     lane_cost,
     open_path_costs,
@@ -69,7 +70,7 @@ class Refinement:
     """Dives at the close calls (``contested_dives`` at ``LaneParams.contested_margin``)."""
     jog_dives: int = 2
     """The most width-jog dives per round (``jog_positions``), largest jog first."""
-    jog_threshold_m: float = 1.0
+    jog_threshold_m: float = JOG_THRESHOLD_M
     """A width jog: the second difference of the matching-line lengths above this, metres."""
     short_lane_m: float = 20.0
     """A boundary with less path ahead (metres) while the map reaches farther is short: every

@@ -29,6 +29,7 @@ __all__ = [
     "lane_cost",
     "within_radius",
     "reach_costs",
+    "JOG_THRESHOLD_M",
     "REACH_M",
     "open_path_costs",
     "color_cost",
@@ -48,6 +49,12 @@ __all__ = [
 #: short-lane retry; beyond it both extend a lane's far ends (``rld.insertion.extend_ends``).
 #: Source: our choice.
 REACH_M = 25.0
+
+#: A width jog: a boundary cone whose matching line's second difference
+#: (``width_second_differences``) exceeds this, metres; where CLC's refinement dives
+#: (``Refinement.jog_threshold_m``) and where a swap may happen (``rld.insertion.swap_cones``).
+#: Chosen by measurement: docs/tuning.md#jog_threshold_m.
+JOG_THRESHOLD_M = 1.0
 
 #: The CLC ranking features (section VII), in the order of ``ranking_features``.
 FEATURE_NAMES = (

@@ -17,7 +17,13 @@ from scipy.spatial import cKDTree
 
 from rld import insertion_kernels as ik
 from rld.constraints import blocked_by_fixed, lane_is_feasible
-from rld.costs import lane_cost, reach_costs, within_radius
+from rld.costs import (
+    JOG_THRESHOLD_M,
+    lane_cost,
+    reach_costs,
+    width_second_differences,
+    within_radius,
+)
 from rld.types import LaneParams, Pose
 
 __all__ = ["boundary_edges", "beside", "insertion_delta", "insert_cones", "extend_ends",
@@ -240,10 +246,10 @@ def extend_starts(points: np.ndarray, pose: Pose, sides: Sequence[np.ndarray],
 
 def swap_cones(points: np.ndarray, pose: Pose, sides: Sequence[np.ndarray], params: LaneParams,
                reach_m: float, colors: np.ndarray | None = None) -> tuple[list[np.ndarray], int]:
-    """The open lane (left, right) with at most one cone swapped: of the lanes with one cone
-    within ``reach_m`` (``within_radius``; not a boundary's first) replaced by an unused map
-    cone within ``SWAP_RADIUS_M``, the one CLC's judge prefers most (``reach_costs``: eq. 29
-    plus the width roughness), if it beats the lane and stays feasible (less w_max)."""
+    """The open lane (left, right) with at most one cone swapped: of the lanes with one cone at a
+    width jog (above ``JOG_THRESHOLD_M``) within ``reach_m`` (``within_radius``) replaced by an
+    unused map cone within ``SWAP_RADIUS_M``, the one CLC's judge prefers most (``reach_costs``:
+    eq. 29 plus the width roughness), if it beats the lane and stays feasible (less w_max)."""
     sides = [np.asarray(S, dtype=np.int64).copy() for S in sides]
     if min(S.size for S in sides) < 2:
         return sides, 0
@@ -251,7 +257,9 @@ def swap_cones(points: np.ndarray, pose: Pose, sides: Sequence[np.ndarray], para
     used = set(np.concatenate(sides).tolist())
     trials = []
     for s_i, S in enumerate(sides):
-        for j in range(1, within_radius(points, S, pose, reach_m).size):
+        idx = within_radius(points, S, pose, reach_m)
+        d2 = np.abs(width_second_differences(points[idx], points[sides[1 - s_i]]))
+        for j in np.flatnonzero(d2 > JOG_THRESHOLD_M) + 1:  # d2[k]: cone k + 1's jog
             for c in tree.query_ball_point(points[S[j]], SWAP_RADIUS_M):
                 if c not in used:
                     new = list(sides)

@@ -310,6 +310,15 @@ def test_lap_start_matches_brute_force_and_never_raises_the_objective(seed):
 # -- swaps (rld.insertion.swap_cones) --------------------------------------------------------
 
 
+def _polyline_distance(poly: np.ndarray, q: np.ndarray) -> float:
+    """A point's distance to a polyline (metres), segment by segment."""
+    best = np.inf
+    for a, b in zip(poly[:-1], poly[1:], strict=True):
+        t = np.clip((q - a) @ (b - a) / max((b - a) @ (b - a), 1e-12), 0.0, 1.0)
+        best = min(best, float(np.hypot(*(a + t * (b - a) - q))))
+    return best
+
+
 def test_a_false_positive_taken_for_a_true_cone_near_the_car_gives_way_to_it():
     n = XS.size
     # The left side takes a cone 0.7 m inside its line at x = 10.5 (index 2n) for the true one
@@ -330,15 +339,20 @@ def test_a_true_lane_keeps_its_cones_and_only_cones_near_the_car_move():
     pts, left, right = _straight(range(n), range(n, 2 * n), extra)
     (L, R), count = swap_cones(pts, CAR, (left, right), P, 25.0)
     assert count == 0 and L.tolist() == left.tolist()
-    # The left side on the false positives from x = 31.5 on (30.5 m from the car and more),
-    # past the first cone beyond 25 m (x = 28, which ``within_radius`` keeps): nothing moves;
-    # within 40 m the first of them gives way.
+    # The left side on the false positive at x = 31.5 (30.5 m from the car), past the first
+    # cone beyond 25 m (x = 28, which ``within_radius`` keeps): nothing moves; within 40 m it
+    # gives way (a width jog: matching lines 4, 3.3, 4 m, second difference 1.4 m).
     bad = left.copy()
-    bad[9:] = 2 * n + np.arange(9, n)
+    bad[9] = 2 * n + 9
     assert swap_cones(pts, CAR, (bad, right), P, 25.0)[1] == 0
     (L, _), count = swap_cones(pts, CAR, (bad, right), P, 40.0)
-    assert count == 1 and int(np.sum(L != bad)) == 1
-    # A boundary's first cone never moves: the left one on a false positive stays.
+    assert count == 1 and L.tolist() == left.tolist()
+    # Only a cone at a width jog moves: on the false positives from x = 31.5 on, the jog at
+    # x = 31.5 is 0.7 m (4, 3.3, 3.3 m), under JOG_THRESHOLD_M; a boundary's first cone has
+    # no second difference and never moves.
+    run = left.copy()
+    run[9:] = 2 * n + np.arange(9, n)
+    assert swap_cones(pts, CAR, (run, right), P, 40.0)[1] == 0
     first = left.copy()
     first[0] = 2 * n
     (L, _), _ = swap_cones(pts, CAR, (first, right), P, 25.0)
@@ -365,7 +379,13 @@ def test_swap_matches_brute_force_and_never_raises_the_judge(seed):
     used = set(left.tolist()) | set(right.tolist())
     best, best_lane = base - 1e-9, None
     for s_i, S in enumerate((left, right)):
-        for j in range(1, within_radius(pts, S, car, 25.0).size):
+        idx = within_radius(pts, S, car, 25.0)
+        other = (left, right)[1 - s_i]
+        for j in range(1, idx.size - 1):
+            # A width jog: the second difference of the matching-line lengths (by hand).
+            widths = [_polyline_distance(pts[other], pts[q]) for q in idx[j - 1:j + 2]]
+            if abs(widths[0] - 2 * widths[1] + widths[2]) <= 1.0:
+                continue
             for c in range(pts.shape[0]):
                 if c in used or np.hypot(*(pts[c] - pts[S[j]])) > 1.5:
                     continue
