@@ -136,7 +136,7 @@ def main() -> None:
     ap.add_argument("--every", type=int, default=2, help="every k-th pose (keep it below 5)")
     ap.add_argument("--processes", type=int, default=2, help="worker processes")
     ap.add_argument("--rule", default="ends", choices=sorted(RULES),
-                    help="the rule paired: end extensions, or CLC's lap-start rule")
+                    help="the rule paired: end extensions, CLC's lap-start rule, or the swaps")
     ap.add_argument("--fp-rates", default="0,0.3,0.5", help="false-positive rates")
     ap.add_argument("--out", default="", help="also write the records to this JSON file")
     a = ap.parse_args()

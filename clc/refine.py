@@ -31,12 +31,12 @@ from rld.constraints import lane_is_feasible
 from rld.costs import (
     JOG_THRESHOLD_M,
     REACH_M,
+    jog_positions,
     lane_cost,
     open_path_costs,
     ranking_features,
     reach_costs,
     width_roughness,
-    width_second_differences,
     within_radius,
 )
 from rld.insertion import (
@@ -257,19 +257,6 @@ def dive_costs(points: np.ndarray, pose: Pose, params: LaneParams, lanes,
         if lane[2]:
             out[k] = dive_cost(points, pose, params, lane[0], lane[1], True, colors, reach_m)
     return out
-
-
-def jog_positions(points: np.ndarray, pose: Pose, left: np.ndarray, right: np.ndarray,
-                  threshold_m: float, reach_m: float) -> list[tuple[int, int]]:
-    """(side, j) of every cone of ``left`` (0) or ``right`` (1) within ``reach_m`` of the car
-    whose matching line (CLC eq. 9) has an absolute second difference above ``threshold_m``
-    (metres; ``width_second_differences``), largest first: where the lane's width jogs."""
-    out = []
-    for side, path, other in ((0, left, right), (1, right, left)):
-        idx = within_radius(points, path, pose, reach_m)
-        d2 = np.abs(width_second_differences(points[idx], points[other]))
-        out += [(-float(d2[k]), side, int(k) + 1) for k in np.flatnonzero(d2 > threshold_m)]
-    return [(side, j) for _, side, j in sorted(out)]
 
 
 def _jog_dives(points, pose, params, res, left, right, budget, done, edits=DEFAULT,

@@ -190,7 +190,7 @@ def _swapped(points, pose, lane: Lane, params: LaneParams, colors) -> Lane:
     """``rld``'s open ``lane`` with one cone near the car swapped where CLC's judge prefers it
     (``rld.insertion.swap_cones``, as CLC's refinement does), its cost recomputed; the kept
     chain is not touched. ``stats["swapped"]`` counts the swap."""
-    from rld import insertion
+    from rld import insertion  # looked up per call, as benchmarks/bench_ends.py spies on it
     from rld.costs import REACH_M, lane_cost
 
     if not lane.ok or lane.closed:

@@ -29,6 +29,7 @@ __all__ = [
     "lane_cost",
     "within_radius",
     "reach_costs",
+    "jog_positions",
     "JOG_THRESHOLD_M",
     "REACH_M",
     "open_path_costs",
@@ -51,8 +52,9 @@ __all__ = [
 REACH_M = 25.0
 
 #: A width jog: a boundary cone whose matching line's second difference
-#: (``width_second_differences``) exceeds this, metres; where CLC's refinement dives
-#: (``Refinement.jog_threshold_m``) and where a swap may happen (``rld.insertion.swap_cones``).
+#: (``width_second_differences``, ``jog_positions``) exceeds this, metres; where CLC's
+#: refinement dives (``Refinement.jog_threshold_m``) and where a swap may happen
+#: (``rld.insertion.swap_cones``).
 #: Chosen by measurement: docs/tuning.md#jog_threshold_m.
 JOG_THRESHOLD_M = 1.0
 
@@ -133,7 +135,7 @@ def width_second_differences(query_xy: np.ndarray, target_xy: np.ndarray) -> np.
     ``query_xy`` to the boundary ``target_xy`` (each cone's distance to the target polyline,
     CLC eq. 9), in order: entry k belongs to query cone k + 1. Empty for fewer than 3 query
     cones or fewer than 2 target cones. ``width_roughness`` sums their squares;
-    ``clc.refine.jog_positions`` finds the large ones."""
+    ``jog_positions`` finds the large ones."""
     Q = np.asarray(query_xy, dtype=np.float64).reshape(-1, 2)
     T = np.asarray(target_xy, dtype=np.float64).reshape(-1, 2)
     if Q.shape[0] < 3 or T.shape[0] < 2:
@@ -371,6 +373,19 @@ def within_radius(points: np.ndarray, idx: np.ndarray, pose: Pose,
     # near_car_mask's test (distance <= radius_m is near), in one compiled loop.
     return idx[:ck.radius_cut(np.ascontiguousarray(points, dtype=np.float64), idx,
                               float(pose.xy[0]), float(pose.xy[1]), float(radius_m))]
+
+
+def jog_positions(points: np.ndarray, pose: Pose, left: np.ndarray, right: np.ndarray,
+                  threshold_m: float, reach_m: float) -> list[tuple[int, int]]:
+    """(side, j) of every cone of ``left`` (0) or ``right`` (1) within ``reach_m`` of the car
+    whose matching line (CLC eq. 9) has an absolute second difference above ``threshold_m``
+    (metres; ``width_second_differences``), largest first: where the lane's width jogs."""
+    out = []
+    for side, path, other in ((0, left, right), (1, right, left)):
+        idx = within_radius(points, path, pose, reach_m)
+        d2 = np.abs(width_second_differences(points[idx], points[other]))
+        out += [(-float(d2[k]), side, int(k) + 1) for k in np.flatnonzero(d2 > threshold_m)]
+    return [(side, j) for _, side, j in sorted(out)]
 
 
 def reach_costs(points: np.ndarray, pose: Pose, params: LaneParams, lanes, radius_m: float,

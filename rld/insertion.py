@@ -17,13 +17,7 @@ from scipy.spatial import cKDTree
 
 from rld import insertion_kernels as ik
 from rld.constraints import blocked_by_fixed, lane_is_feasible
-from rld.costs import (
-    JOG_THRESHOLD_M,
-    lane_cost,
-    reach_costs,
-    width_second_differences,
-    within_radius,
-)
+from rld.costs import JOG_THRESHOLD_M, jog_positions, lane_cost, reach_costs
 from rld.types import LaneParams, Pose
 
 __all__ = ["boundary_edges", "beside", "insertion_delta", "insert_cones", "extend_ends",
@@ -247,7 +241,7 @@ def extend_starts(points: np.ndarray, pose: Pose, sides: Sequence[np.ndarray],
 def swap_cones(points: np.ndarray, pose: Pose, sides: Sequence[np.ndarray], params: LaneParams,
                reach_m: float, colors: np.ndarray | None = None) -> tuple[list[np.ndarray], int]:
     """The open lane (left, right) with at most one cone swapped: of the lanes with one cone at a
-    width jog (above ``JOG_THRESHOLD_M``) within ``reach_m`` (``within_radius``) replaced by an
+    width jog (``jog_positions`` above ``JOG_THRESHOLD_M``) within ``reach_m`` replaced by an
     unused map cone within ``SWAP_RADIUS_M``, the one CLC's judge prefers most (``reach_costs``:
     eq. 29 plus the width roughness), if it beats the lane and stays feasible (less w_max)."""
     sides = [np.asarray(S, dtype=np.int64).copy() for S in sides]
@@ -256,16 +250,13 @@ def swap_cones(points: np.ndarray, pose: Pose, sides: Sequence[np.ndarray], para
     tree = cKDTree(points)
     used = set(np.concatenate(sides).tolist())
     trials = []
-    for s_i, S in enumerate(sides):
-        idx = within_radius(points, S, pose, reach_m)
-        d2 = np.abs(width_second_differences(points[idx], points[sides[1 - s_i]]))
-        for j in np.flatnonzero(d2 > JOG_THRESHOLD_M) + 1:  # d2[k]: cone k + 1's jog
-            for c in tree.query_ball_point(points[S[j]], SWAP_RADIUS_M):
-                if c not in used:
-                    new = list(sides)
-                    new[s_i] = S.copy()
-                    new[s_i][j] = c
-                    trials.append(new)
+    for s_i, j in jog_positions(points, pose, sides[0], sides[1], JOG_THRESHOLD_M, reach_m):
+        for c in tree.query_ball_point(points[sides[s_i][j]], SWAP_RADIUS_M):
+            if c not in used:
+                new = list(sides)
+                new[s_i] = sides[s_i].copy()
+                new[s_i][j] = c
+                trials.append(new)
     if not trials:
         return sides, 0
     costs = reach_costs(points, pose, params, [sides, *trials], reach_m, colors)
