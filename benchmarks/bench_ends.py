@@ -1,6 +1,7 @@
 """A lane edit of ``rld.insertion`` (``--rule``): the end extensions (``extend_ends``, in ``rld``
-and CLC), CLC's lap-start rule (``starts``, ``extend_starts``) or the swaps (``swaps``,
-``swap_cones``, in ``rld`` and CLC): each pose's lane scored as returned
+and CLC), CLC's lap-start rule (``starts``, ``extend_starts``), the swaps (``swaps``,
+``swap_cones``, in ``rld`` and CLC) or ``rld``'s held lane (``holds``,
+``IncrementalRld.hold``: before it, no lane): each pose's lane scored as returned
 and as it was before the rule, exactly paired (the same call), one ``LaneSolver`` per lap,
 every 2nd pose of the shared tracks. Choosing seeds 0-4, reporting seeds 5-9 (DESIGN.md,
 "Choosing and reporting").
@@ -25,7 +26,8 @@ import numpy as np
 #: where that method looks it up}).
 RULES = {"ends": ("extend_ends", {"rld": "rld.incremental", "clc": "clc.refine"}),
          "starts": ("extend_starts", {"clc": "clc.refine"}),
-         "swaps": ("swap_cones", {"rld": "rld.insertion", "clc": "clc.refine"})}
+         "swaps": ("swap_cones", {"rld": "rld.insertion", "clc": "clc.refine"}),
+         "holds": ("IncrementalRld.hold", {"rld": "rld.incremental"})}
 
 
 def _job(args) -> list[dict]:
@@ -44,6 +46,9 @@ def _job(args) -> list[dict]:
     if method not in modules:
         raise ValueError(f"rule {rule!r} is not in method {method!r}")
     module = importlib.import_module(modules[method])
+    *owner_path, name = name.split(".")
+    for part in owner_path:  # a method: replaced on its class
+        module = getattr(module, part)
     original = getattr(module, name)
     seen: dict = {}
 
@@ -51,7 +56,13 @@ def _job(args) -> list[dict]:
         seen["sides"], seen["points"] = [np.array(s) for s in sides], points
         return original(points, pose, sides, *args, **kwargs)
 
-    setattr(module, name, spy)
+    def held(self, points, pose, *args, **kwargs):
+        out = original(self, points, pose, *args, **kwargs)
+        if out is not None:  # before the rule: no lane
+            seen["sides"], seen["points"] = [np.zeros(0, np.int64)] * 2, points
+        return out
+
+    setattr(module, name, held if owner_path else spy)
     folder = find_dataset_dir()
     out = []
     try:
@@ -65,7 +76,9 @@ def _job(args) -> list[dict]:
                 lane = solver.solve(f.cones, f.pose)
                 a = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
                 b = a
-                if seen and lane.ok and not lane.closed:  # the solver's cones -> the caller's
+                if seen and lane.ok and not seen["sides"][0].size:  # a held lane: none
+                    b = score_lane(f, seen["sides"][0], seen["sides"][1], False, False)
+                elif seen and lane.ok and not lane.closed:  # the solver's cones -> the caller's
                     idx = cKDTree(f.cones).query(seen["points"])[1]
                     left, right = (idx[s] for s in seen["sides"])
                     b = score_lane(f, left, right, True, False)
@@ -136,7 +149,8 @@ def main() -> None:
     ap.add_argument("--every", type=int, default=2, help="every k-th pose (keep it below 5)")
     ap.add_argument("--processes", type=int, default=2, help="worker processes")
     ap.add_argument("--rule", default="ends", choices=sorted(RULES),
-                    help="the rule paired: end extensions, CLC's lap-start rule, or the swaps")
+                    help="the rule paired: end extensions, CLC's lap-start rule, the swaps, "
+                         "or rld's held lane")
     ap.add_argument("--fp-rates", default="0,0.3,0.5", help="false-positive rates")
     ap.add_argument("--out", default="", help="also write the records to this JSON file")
     a = ap.parse_args()

@@ -75,7 +75,8 @@ class _RldMethod:
     keeps its chain: a later call re-solves the car's window, re-attaches the kept chain where
     they join and grows it for at most ``KEPT_GROWTH_S`` (a whole chain where they do not).
     The lane is returned from the car forward (``IncrementalRld.forward``), its far ends
-    extended (``IncrementalRld.extend_ends``); a short one is tried again (``_retry``)."""
+    extended (``IncrementalRld.extend_ends``); a short one is tried again (``_retry``); where
+    no window gives a lane, a reused solver holds its last (``IncrementalRld.hold``)."""
 
     backends: tuple[str, ...] = ("cpsat", "highs", "cvxpy", "auto")
     rankers = False
@@ -118,6 +119,10 @@ class _RldMethod:
                                             colors)
         if self.chainer.short(points, pose, lane):
             lane = self._retry(points, pose, lane, t0, budget, colors, confidence)
+        if not lane.ok:  # no lane on this map, even tried again: the last call's, if it stands
+            held = self.chainer.hold(points, pose, lane, kept, colors)
+            if held is not None:
+                lane, self.kept = held, self.chainer.keep(points, pose, held)
         return _swapped(points, pose, lane, self.model.params, colors)
 
     def _retry(self, points, pose, lane, t0, budget, colors, confidence) -> Lane:

@@ -406,6 +406,37 @@ class IncrementalRld:
             return "the joined lane fails the checks"
         return L, R, False, int(L.size - il - 1 + R.size - ir - 1), cut
 
+    def hold(self, points: np.ndarray, pose: Pose, failed: Lane, kept: KeptChain | None,
+             colors: np.ndarray | None = None) -> Lane | None:
+        """The last call's chain ``kept``, every cone matched on this map and from the car
+        forward, for a call whose car window gave no lane (``failed``); ``None`` when the pose
+        jumped, a cone is gone, a side keeps fewer than two cones or the lane fails the checks."""
+        if kept is None or pose_jumped(pose, kept.pose):
+            return None
+        matched = self._match(points, (kept.left_xy, kept.right_xy))
+        if matched is None:
+            return None
+        L, R = matched
+        j = [self._start_index(points, pose, S, closed=kept.closed) for S in (L, R)]
+        if kept.closed:
+            L, R = np.roll(L, -j[0]), np.roll(R, -j[1])
+        else:
+            L, R = L[j[0]:], R[j[1]:]
+        if min(L.size, R.size) < 2 or not lane_is_feasible(
+                points[L], points[R], self.params, closed=kept.closed, max_width=False):
+            return None
+        stats = dict(failed.stats, held=failed.message)
+        stats["chain"] = {"windows": 0, "steps": 0, "stop": kept.stop, "kept_cones":
+                          int(L.size + R.size), "not_kept": None, "cut": False,
+                          "added_cones": int(L.size + R.size)}
+        return Lane(cones=points, left=L, right=R, status=LaneStatus.FEASIBLE,
+                    closed=kept.closed,
+                    message=f"the last call's lane, held: the car's window gave none "
+                            f"({failed.message})",
+                    cost=lane_cost(points, L, R, pose, self.params, closed=kept.closed,
+                                   colors=colors),
+                    stats=stats)
+
     @staticmethod
     def keep(points: np.ndarray, pose: Pose, lane: Lane) -> KeptChain | None:
         """What the next call of a reused ``rld`` solver needs of the chained ``lane``."""

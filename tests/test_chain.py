@@ -276,3 +276,44 @@ def test_a_short_lane_gives_way_to_the_wider_windows_lane_and_a_whole_one_does_n
     whole = solver.solve(cones, CAR, time_limit_s=5.0)
     assert "retry" not in whole.stats and whole.left.size == n
     assert method._retry(cones, CAR, whole, time.perf_counter(), 5.0, None, None) is whole
+
+
+def _no_window_lane(monkeypatch) -> None:
+    """Every RLD window program (the car's and the retry's) gives no lane."""
+    from rld.types import Lane
+
+    monkeypatch.setattr(RldModel, "solve",
+                        lambda self, points, pose, **kw: Lane.not_found(points, "forced"))
+
+
+def test_a_call_whose_windows_give_no_lane_holds_the_last_chain(monkeypatch):
+    cones, n = straight()
+    solver = LaneSolver("rld")
+    assert solver.solve(cones, CAR, time_limit_s=5.0).left.size == n
+    pose = Pose(2.0, 0.0, 0.0)
+    with monkeypatch.context() as m:
+        _no_window_lane(m)
+        lane = solver.solve(cones, pose, time_limit_s=5.0)
+    assert lane.ok and lane.status is LaneStatus.FEASIBLE and "held" in lane.message
+    assert lane.stats["held"] == "forced"
+    # The last call's lane, from the car forward (x = 0.5 m is behind the car at x = 2 m).
+    np.testing.assert_array_equal(lane.left, np.arange(1, n))
+    np.testing.assert_array_equal(lane.right, n + np.arange(1, n))
+    # Held, it is kept: the next call re-attaches it, and finds the stateless lane.
+    after = solver.solve(cones, Pose(4.0, 0.0, 0.0), time_limit_s=5.0)
+    assert after.stats["chain"]["kept_cones"] > 0
+    _same(after, solve_lane(cones, Pose(4.0, 0.0, 0.0), time_limit_s=5.0))
+
+
+@pytest.mark.parametrize("case", ["fresh solver", "pose jump", "kept cone gone"])
+def test_no_lane_stays_no_lane_where_the_last_chain_cannot_be_held(monkeypatch, case):
+    cones, n = straight()
+    solver = LaneSolver("rld")
+    if case != "fresh solver":
+        solver.solve(cones, CAR, time_limit_s=5.0)
+    pose = Pose(40.0 if case == "pose jump" else 2.0, 0.0, 0.0)
+    now = np.delete(cones, 10, axis=0) if case == "kept cone gone" else cones
+    with monkeypatch.context() as m:
+        _no_window_lane(m)
+        lane = solver.solve(now, pose, time_limit_s=5.0)
+    assert not lane.ok and lane.message == "forced"
