@@ -59,7 +59,7 @@ def _job(args) -> list[dict]:
     def held(self, points, pose, *args, **kwargs):
         out = original(self, points, pose, *args, **kwargs)
         if out is not None:  # before the rule: no lane
-            seen["sides"], seen["points"] = [np.zeros(0, np.int64)] * 2, points
+            seen["held"] = True
         return out
 
     setattr(module, name, held if owner_path else spy)
@@ -76,8 +76,9 @@ def _job(args) -> list[dict]:
                 lane = solver.solve(f.cones, f.pose)
                 a = score_lane(f, lane.left, lane.right, lane.ok, lane.closed)
                 b = a
-                if seen and lane.ok and not seen["sides"][0].size:  # a held lane: none
-                    b = score_lane(f, seen["sides"][0], seen["sides"][1], False, False)
+                if seen.get("held") and lane.ok:  # before the rule: no lane
+                    none = np.zeros(0, dtype=np.int64)
+                    b = score_lane(f, none, none, False, False)
                 elif seen and lane.ok and not lane.closed:  # the solver's cones -> the caller's
                     idx = cKDTree(f.cones).query(seen["points"])[1]
                     left, right = (idx[s] for s in seen["sides"])

@@ -325,6 +325,14 @@ class IncrementalRld:
                 break
         return j
 
+    def _from_car(self, points, pose, sides, closed: bool) -> tuple[np.ndarray, ...]:
+        """Each side from its ``_start_index`` on: a closed lane's rolled there, an open one's
+        cut there."""
+        js = [self._start_index(points, pose, S, closed=closed) for S in sides]
+        if closed:
+            return tuple(np.roll(S, -j) for S, j in zip(sides, js, strict=True))
+        return tuple(S[j:] for S, j in zip(sides, js, strict=True))
+
     def _ahead(self, points, pose, side) -> int:
         """Cones of a boundary from the one nearest the car onward (all of them when closed)."""
         return side.size if self.closed else side.size - self._start_index(points, pose, side)
@@ -363,8 +371,7 @@ class IncrementalRld:
                 pos = {int(c): j for j, c in enumerate(K)}
                 js = np.array([pos.get(int(c), -1) for c in W])
                 on_loop &= bool(np.all(js >= 0) and np.all(np.diff(js) % K.size == 1))
-            starts = [self._start_index(points, pose, S, closed=True) for S in matched]
-            matched = tuple(np.roll(S, -j) for S, j in zip(matched, starts, strict=True))
+            matched = self._from_car(points, pose, matched, closed=True)
             if on_loop:
                 return matched[0], matched[1], True, int(matched[0].size + matched[1].size), \
                     False
@@ -416,12 +423,7 @@ class IncrementalRld:
         matched = self._match(points, (kept.left_xy, kept.right_xy))
         if matched is None:
             return None
-        L, R = matched
-        j = [self._start_index(points, pose, S, closed=kept.closed) for S in (L, R)]
-        if kept.closed:
-            L, R = np.roll(L, -j[0]), np.roll(R, -j[1])
-        else:
-            L, R = L[j[0]:], R[j[1]:]
+        L, R = self._from_car(points, pose, matched, kept.closed)
         if min(L.size, R.size) < 2 or not lane_is_feasible(
                 points[L], points[R], self.params, closed=kept.closed, max_width=False):
             return None
@@ -568,7 +570,7 @@ class IncrementalRld:
             return Lane(cones=points, left=L, right=R, status=lane.status,
                         message=lane.message, cost=lane.cost, stats=stats)
         if closed and grown:  # a loop: each side from the car, as rld-incremental returns it
-            L, R = (np.roll(S, -self._start_index(points, pose, S, closed=True)) for S in (L, R))
+            L, R = self._from_car(points, pose, (L, R), closed=True)
         # OPTIMAL: every window's program proven optimal (not the chained lane as a whole).
         return Lane(cones=points, left=L, right=R,
                     status=LaneStatus.OPTIMAL if optimal else LaneStatus.FEASIBLE,
