@@ -7,8 +7,10 @@ of the six shared tracks (R = 30 m, no false positives), solves it with ``LaneSo
 iteration limit in effect (``max_iterations`` 1e9), both otherwise at their defaults, and
 compares the lanes from each side's first cone not behind the car (closed lanes as edge sets).
 Each disagreement gets its cause: ``lap start`` (pose 0: no cone behind the car, the two start
-rules take different cones beside it) or ``RLD lane not CLC-feasible`` (it fails
-``lane_is_feasible``, so CLC cannot return it); anything else is ``unexplained``.
+rules take different cones beside it), ``RLD lane not CLC-feasible`` (it fails
+``lane_is_feasible``, so CLC cannot return it) or ``first cone`` (the lanes differ only in one
+side's first cone, which one lane has and the other not: RLD's path from behind the car passes
+it, CLC's start pair takes it); anything else is ``unexplained``.
 tests/test_crosscheck.py holds the figures.
 """
 
@@ -35,6 +37,18 @@ def ahead(points: np.ndarray, pose, lane) -> tuple:
                      for p in (lane.left, lane.right))
     return tuple(tuple(p[geo.leading_behind(points[p], pose.xy, pose.heading, keep=1):].tolist())
                  for p in (lane.left, lane.right))
+
+
+def first_cone_only(a: tuple, b: tuple) -> bool:
+    """Whether two open lanes as ``ahead`` gives them differ only in one side, which is the
+    other lane's side with one cone more at its start."""
+    if not all(isinstance(x, tuple) for x in (*a, *b)):
+        return False  # a closed lane (edge sets)
+    diff = [k for k in (0, 1) if a[k] != b[k]]
+    if len(diff) != 1:
+        return False
+    x, y = sorted((a[diff[0]], b[diff[0]]), key=len)
+    return len(y) == len(x) + 1 and y[1:] == x
 
 
 def run(dataset_dir, tracks: Sequence[int] = TRACKS, fp_rate: float = 0.0, every: int = 15,
@@ -69,6 +83,8 @@ def run(dataset_dir, tracks: Sequence[int] = TRACKS, fp_rate: float = 0.0, every
                 elif rld.ok and not lane_is_feasible(pts[rld.left], pts[rld.right], window,
                                                      closed=rld.closed):
                     rec["cause"] = "RLD lane not CLC-feasible"
+                elif first_cone_only(ahead(pts, f.pose, rld), ahead(pts, f.pose, clc)):
+                    rec["cause"] = "first cone"
                 else:
                     rec["cause"] = "unexplained"
             out.append(rec)

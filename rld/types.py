@@ -172,10 +172,10 @@ class LaneParams:
     w_benefit: float = 2.5
     """RLD w_b (eq. 29): the reward for every chosen edge, dimensionless; the paper prints no
     value. Chosen by measurement (a grid with theta_t and d_t): docs/tuning.md#w_benefit."""
-    w_regularity: float = 0.0
+    w_regularity: float = 0.5
     """Weight of the spacing-regularity cost (``rld.costs.regularity_cost``; ours, dimensionless)
-    in RLD's objective and ``lane_cost``; 0, the default, turns it off: real spacing changes from
-    straight to corner. Chosen by measurement: docs/tuning.md#w_regularity."""
+    in RLD's objective and ``lane_cost`` (so CLC's judge too); 0 turns it off. Chosen by
+    measurement: docs/tuning.md#w_regularity."""
     w_width_roughness: float = 0.2
     """Weight of the width roughness (``rld.costs.width_roughness``, per m^2; ours) in CLC's dive
     judge (``clc.refine.dive_cost``); 0 turns it off. The roughness of true lanes in hairpins

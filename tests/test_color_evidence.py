@@ -140,9 +140,11 @@ CAR = Pose(1.0, 0.0, 0.0)
 
 def _scene_with_decoy():
     """The straight lane plus a decoy cone 0.65 m inside the left boundary between its fourth
-    and fifth cones: colourless, RLD's left boundary takes it (one more edge's benefit, 2.5,
-    for about 1.8 in spacing and angle costs: a gain of about 0.7); labelled yellow (the right
-    side's class: w_color more), it is left out when w_color exceeds that gain."""
+    and fifth cones: colourless and without the regularity term (``_PLAIN``), RLD's left
+    boundary takes it (one more edge's benefit, 2.5, for about 1.8 in spacing and angle costs:
+    a gain of about 0.7); labelled yellow (the right side's class: w_color more), it is left
+    out when w_color exceeds that gain. The default regularity weight (0.5) leaves it out on
+    its own (two cones at a ratio of 2: 1.0 more)."""
     decoy = np.array([[12.25, 1.35]])
     return np.vstack([LEFT, RIGHT, decoy]), LEFT.shape[0] + RIGHT.shape[0]
 
@@ -153,15 +155,19 @@ def _contradictions(lane, codes) -> int:
     return int((codes[lane.left] == "yellow").sum() + (codes[lane.right] == "blue").sum())
 
 
-#: A colour weight above the decoy's geometric gain (about 0.7) and one below it.
-_STRONG, _WEAK = LaneParams(w_color=2.0), LaneParams(w_color=0.35)
+#: The paper's geometry alone (no regularity term); a colour weight above the decoy's gain
+#: there (about 0.7) and one below it.
+_PLAIN = LaneParams(w_regularity=0.0)
+_STRONG = LaneParams(w_color=2.0, w_regularity=0.0)
+_WEAK = LaneParams(w_color=0.35, w_regularity=0.0)
 
 
 @pytest.mark.parametrize("method", ["rld", "rld-sided", "rld-incremental"])
 def test_a_cone_of_the_other_side_is_left_out(method):
     pts, decoy = _scene_with_decoy()
     codes = ["blue"] * XS.size + ["yellow"] * XS.size + ["yellow"]
-    plain = solve_lane(pts, CAR, method=method, time_limit_s=5)
+    plain = solve_lane(pts, CAR, method=method, time_limit_s=5, params=_PLAIN)
+    assert decoy not in solve_lane(pts, CAR, method=method, time_limit_s=5).left  # regularity
     coloured = solve_lane(pts, CAR, method=method, colors=codes, time_limit_s=5, params=_STRONG)
     assert plain.ok and _contradictions(plain, codes) >= 1  # the geometry alone errs
     assert coloured.ok and _contradictions(coloured, codes) == 0

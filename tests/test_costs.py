@@ -81,9 +81,12 @@ def test_edge_objective_matches_lane_cost():
     from rld.constraints import angle_triples
 
     _, turns = angle_triples(pts, edges)
+    lens = np.hypot(*np.diff(pts, axis=0).T)
     expect = costs.edge_objective(pts, edges, CAR, p).sum() + costs.angle_cost(
         turns, p.angle_tolerance_rad
-    ).sum()
+    ).sum() + p.w_regularity * costs.regularity_cost(lens[:-1], lens[1:],
+                                                     p.regularity_tolerance).sum()
+    assert p.w_regularity > 0  # the default pays the regularity term at every interior cone
     assert costs.lane_cost(pts, [0, 1, 2, 3, 4], [], CAR, p) == pytest.approx(expect)
 
 
@@ -140,7 +143,7 @@ def test_regularity_cost_hand_worked():
                                  2.0) == pytest.approx([0.0, 1.0, 1.0])
     assert costs.regularity_cost(8.0, 2.0, 2.0) == pytest.approx(4.0)  # (ln 4 / ln 2)^2
     p = LaneParams(w_regularity=3.0, regularity_tolerance=2.0)
-    off = LaneParams()
+    off = LaneParams(w_regularity=0.0)
     line = np.array([[0.0, 2.0], [2.0, 2.0], [6.0, 2.0], [10.0, 2.0]])  # edges 2, 4, 4
     extra = costs.lane_cost(line, [0, 1, 2, 3], [], CAR, p) - \
         costs.lane_cost(line, [0, 1, 2, 3], [], CAR, off)

@@ -241,7 +241,7 @@ def test_backends_agree(seed):
         assert values[2] == pytest.approx(values[0], abs=1e-4)
 
 
-@pytest.mark.parametrize("seed, n, integral", [(0, 12, True), (2, 12, False), (12, 20, False),
+@pytest.mark.parametrize("seed, n, integral", [(0, 12, True), (12, 12, False), (16, 20, False),
                                                (5, 20, True)])
 def test_lp_first_settles_only_integral_relaxations(seed, n, integral):
     """HiGHS's relaxation first: an integral LP optimum is returned as the program's optimum
@@ -454,7 +454,8 @@ def test_regularity_cost_changes_the_optimum():
     right = np.column_stack([[0.0, 3.5, 7.0, 10.5], np.full(4, -2.0)])
     points = np.vstack([left, right])
     pose = Pose(0.5, 0.0, 0.0)
-    off = LaneSolver("rld", PARAMS, "highs").solve(points, pose)
+    off = LaneSolver("rld", dataclasses.replace(PARAMS, w_regularity=0.0),
+                     "highs").solve(points, pose)
     on = LaneSolver("rld", dataclasses.replace(PARAMS, w_regularity=2.0),
                     "highs").solve(points, pose)
     assert 3 in off.left
