@@ -680,10 +680,10 @@ def train_ranker(n_generated: int, train_tracks: list[int], fp_rates: list[float
 @click.option("--plot-failures", is_flag=True,
               help="Draw every pose critical by the geometric rule at 0.5 m (into "
                    "OUT/failures); off by default.")
-@click.option("--results", "results_page", default=None, metavar="FILE", callback=_out_file,
-              show_default="none",
+@click.option("--results", "results_page", default=None, metavar="FILE",
+              callback=_out_file_anywhere, show_default="none",
               help="Also write the results page (Markdown, as docs/results.md) to this file, "
-                   "its pictures beside it.")
+                   "its pictures beside it (its folder created if missing).")
 @click.option("--param", "param_items", multiple=True, metavar="NAME=VALUE", help=_PARAM_HELP)
 @click.option("--color-accuracy", type=click.FloatRange(0.0, 1.0), default=None,
               show_default="no colour",
@@ -750,6 +750,7 @@ def eval_cmd(dataset: str | None, methods: str, track_ids: list[int] | None, n_g
         page = Path(results_page)
         images = []
         try:
+            page.parent.mkdir(parents=True, exist_ok=True)
             for plot in paths["plots"]:
                 target = page.parent / f"{page.stem}_{plot.name}"
                 shutil.copyfile(plot, target)

@@ -60,7 +60,7 @@ def test_parallel_run_equals_the_serial_protocol(tmp_path):
 
 def test_eval_command_on_a_generated_track(tmp_path):
     out = tmp_path / "ev"
-    page = tmp_path / "results.md"
+    page = out / "page" / "results.md"  # its folder is made, as --out's is
     res = CliRunner().invoke(main, [
         "eval", str(tmp_path / "no-such-dataset"), "--generated", "1", "--methods",
         "nearest", "--ranges", "30", "--fp-rates", "0", "--every", "50", "--processes", "1",
