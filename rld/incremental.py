@@ -456,12 +456,12 @@ class IncrementalRld:
         cones, as it is. ``stats["chain"]["behind"]`` counts the cones dropped."""
         if not lane.ok or lane.closed:
             return lane
-        j = [self._start_index(points, pose, S, closed=False) for S in (lane.left, lane.right)]
-        if not any(j) or min(lane.left.size - j[0], lane.right.size - j[1]) < 2:
+        L, R = self._from_car(points, pose, (lane.left, lane.right), closed=False)
+        behind = lane.left.size - L.size + lane.right.size - R.size
+        if not behind or min(L.size, R.size) < 2:
             return lane
-        L, R = lane.left[j[0]:], lane.right[j[1]:]
         stats = dict(lane.stats)
-        stats["chain"] = dict(stats.get("chain", {}), behind=int(j[0] + j[1]))
+        stats["chain"] = dict(stats.get("chain", {}), behind=int(behind))
         return Lane(cones=points, left=L, right=R, status=lane.status, message=lane.message,
                     cost=lane_cost(points, L, R, pose, self.params, colors=colors),
                     stats=stats)
